@@ -1,0 +1,124 @@
+//! The scene names of DESIGN.md §2, resolved to shipped assets, procedural generators or files.
+
+use std::path::Path;
+
+use crate::error::SceneError;
+use crate::load;
+use crate::procedural;
+use crate::scene::Scene;
+
+/// The seed every procedural scene uses unless a caller asks for another.
+pub const DEFAULT_SEED: u64 = 0xACCE_1BE7C4;
+
+/// Every built-in scene, in the order the default matrix runs them. `grass-<N>` accepts any N;
+/// `grass-10k` stands for the family here.
+pub const BUILTIN_SCENES: &[&str] = &[
+    "bunny",
+    "teapot",
+    "dragon-11k",
+    "dragon-48k",
+    "dragon-203k",
+    "dragon",
+    "grass-10k",
+    "stadium",
+    "terrain",
+    "menger",
+    "mandelbulb",
+    "city",
+    "flat",
+    "room",
+];
+
+/// A shipped asset: gzipped OBJ bytes compiled into the binary, so the project runs anywhere
+/// without `../shared`. Provenance is the file's first line; licences are in `scenes/assets/NOTICE`.
+struct Asset {
+    name: &'static str,
+    file: &'static str,
+    bytes: &'static [u8],
+}
+
+const ASSETS: &[Asset] = &[
+    Asset { name: "bunny", file: "bunny.obj.gz", bytes: include_bytes!("../assets/bunny.obj.gz") },
+    Asset { name: "teapot", file: "teapot.obj.gz", bytes: include_bytes!("../assets/teapot.obj.gz") },
+    Asset { name: "dragon-11k", file: "dragon_res4.obj.gz", bytes: include_bytes!("../assets/dragon_res4.obj.gz") },
+    Asset { name: "dragon-48k", file: "dragon_res3.obj.gz", bytes: include_bytes!("../assets/dragon_res3.obj.gz") },
+    Asset { name: "dragon-203k", file: "dragon_res2.obj.gz", bytes: include_bytes!("../assets/dragon_res2.obj.gz") },
+    Asset { name: "dragon", file: "dragon.obj.gz", bytes: include_bytes!("../assets/dragon.obj.gz") },
+];
+
+/// Loads a shipped asset by scene name (`bunny`, `teapot`, `dragon-11k`, …).
+pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
+    let asset = ASSETS.iter().find(|a| a.name == name)?;
+    Some(load::load_bytes(asset.file, asset.bytes).map(|mut scene| {
+        scene.name = asset.name.to_string();
+        scene
+    }))
+}
+
+/// Resolves a scene name: a built-in scene, `grass-<N>` (N like `2500`, `10k`, `1m`), or a path
+/// to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file.
+pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
+    if let Some(scene) = shipped_asset(name) {
+        return scene;
+    }
+    if let Some(count) = name.strip_prefix("grass-") {
+        let n = parse_count(count).ok_or_else(|| SceneError::UnknownScene {
+            name: name.into(),
+            detail: format!("'{count}' is not a triangle count (expected e.g. grass-1k, grass-10k, grass-2500)"),
+        })?;
+        return Ok(procedural::grass(n, DEFAULT_SEED));
+    }
+    let seed = DEFAULT_SEED;
+    match name {
+        "stadium" => {
+            let teapot = shipped_asset("teapot").expect("teapot is a shipped asset")?;
+            Ok(procedural::stadium(&teapot.mesh, seed))
+        }
+        "terrain" => Ok(procedural::terrain(seed)),
+        "menger" => Ok(procedural::menger(procedural::MENGER_LEVEL)),
+        "mandelbulb" => Ok(procedural::mandelbulb(procedural::MANDELBULB_RESOLUTION)),
+        "city" => Ok(procedural::city(seed)),
+        "flat" => Ok(procedural::flat(seed)),
+        "room" => Ok(procedural::room(seed)),
+        _ if load::is_scene_file(Path::new(name)) => load::load_file(Path::new(name)),
+        _ => Err(SceneError::UnknownScene {
+            name: name.into(),
+            detail: format!(
+                "not a built-in scene ({}, grass-<N>) nor a path ending in .obj, .obj.gz, .gltf or .glb",
+                BUILTIN_SCENES.join(", ")
+            ),
+        }),
+    }
+}
+
+/// `2500` → 2500, `10k` → 10 000, `1m` → 1 000 000.
+fn parse_count(s: &str) -> Option<usize> {
+    let lower = s.to_ascii_lowercase();
+    let (digits, scale) = match lower.as_bytes().last()? {
+        b'k' => (&lower[..lower.len() - 1], 1_000),
+        b'm' => (&lower[..lower.len() - 1], 1_000_000),
+        _ => (&lower[..], 1),
+    };
+    digits.parse::<usize>().ok().map(|n| n * scale).filter(|&n| n > 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_parse_with_suffixes() {
+        assert_eq!(parse_count("2500"), Some(2500));
+        assert_eq!(parse_count("10k"), Some(10_000));
+        assert_eq!(parse_count("1M"), Some(1_000_000));
+        assert_eq!(parse_count("0"), None);
+        assert_eq!(parse_count("k"), None);
+        assert_eq!(parse_count("ten"), None);
+    }
+
+    #[test]
+    fn unknown_names_are_rejected_with_the_list() {
+        let err = load_scene("dragon-12k").unwrap_err().to_string();
+        assert!(err.contains("unknown scene 'dragon-12k'") && err.contains("bunny"), "{err}");
+    }
+}

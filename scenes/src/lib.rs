@@ -1,0 +1,21 @@
+//! Meshes, scenes and cameras: the input every acceleration structure is built from.
+//!
+//! Spec: DESIGN.md §3 (shared contracts) and §6 (scenes). Loaders live in [`load`], the
+//! deterministic procedural scenes in [`procedural`], and [`builtin`] resolves the scene names
+//! the command line uses (`bunny`, `dragon-48k`, `grass-10k`, a file path, …).
+
+pub mod builtin;
+pub mod camera;
+pub mod error;
+pub mod geom;
+pub mod load;
+pub mod mesh;
+pub mod procedural;
+pub mod scene;
+
+pub use builtin::{BUILTIN_SCENES, load_scene};
+pub use camera::{Camera, CameraSpec};
+pub use error::{Location, SceneError};
+pub use geom::{Aabb, Ray};
+pub use mesh::Mesh;
+pub use scene::{Object, Scene, Triangle};

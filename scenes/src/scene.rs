@@ -1,0 +1,77 @@
+//! A scene: one merged triangle mesh plus named objects, an optional camera and light.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::camera::CameraSpec;
+use crate::geom::Aabb;
+use crate::mesh::Mesh;
+
+/// A triangle as its three corners: the geometry buffer every triangle structure's kernel reads
+/// (shared, built once per scene, not counted in any structure's memory).
+pub type Triangle = [Vec3; 3];
+
+/// A named range of the scene's triangles, e.g. one closed object of the `room` scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub first_triangle: u32,
+    pub triangle_count: u32,
+    /// True when the object is a closed (watertight, two-manifold) surface: shadow SVDAG's
+    /// double depth maps rely on it (DESIGN.md §4.4).
+    pub closed: bool,
+}
+
+/// Everything a structure is built from. Triangle ids are indices into `mesh.indices`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The name on the command line (`bunny`, `grass-10k`) or the file's stem.
+    pub name: String,
+    pub provenance: String,
+    pub mesh: Mesh,
+    pub objects: Vec<Object>,
+    /// The scene's own camera, if it has one; otherwise [`CameraSpec::canonical`] is used.
+    pub camera: Option<CameraSpec>,
+    /// A point light, for shadow workloads.
+    pub light: Option<Vec3>,
+}
+
+impl Scene {
+    /// A scene of one mesh, as loaded from a file.
+    pub fn from_mesh(name: impl Into<String>, mesh: Mesh) -> Self {
+        let object = Object {
+            name: mesh.name.clone(),
+            first_triangle: 0,
+            triangle_count: mesh.indices.len() as u32,
+            closed: false,
+        };
+        Self { name: name.into(), provenance: mesh.provenance.clone(), mesh, objects: vec![object], camera: None, light: None }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.mesh.triangle_count()
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.mesh.bounds()
+    }
+
+    /// The camera to render with: the scene's own, or the canonical one of DESIGN.md §3.
+    pub fn camera_spec(&self) -> CameraSpec {
+        self.camera.unwrap_or_else(|| CameraSpec::canonical(self.bounds()))
+    }
+
+    /// The point light for shadow rays: the scene's own, or one above and behind the canonical eye.
+    pub fn light_position(&self) -> Vec3 {
+        self.light.unwrap_or_else(|| {
+            let b = self.bounds();
+            b.center() + b.diagonal() * Vec3::new(-0.4, 1.0, 0.6)
+        })
+    }
+
+    /// The triangle soup every triangle structure's kernel reads (see [`Triangle`]).
+    pub fn triangles(&self) -> Arc<[Triangle]> {
+        (0..self.mesh.triangle_count()).map(|i| self.mesh.triangle(i)).collect()
+    }
+}
