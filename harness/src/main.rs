@@ -1,1 +1,64 @@
-fn main() {}
+//! `harness`: the accel-bench command line. See `harness --help` and the README.
+
+mod agreement;
+mod alloc;
+mod cli;
+mod images;
+mod machine;
+mod output;
+mod run;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use cli::{Cli, Command, ListWhat};
+
+#[cfg(not(test))]
+#[global_allocator]
+static GLOBAL: alloc::CountingAlloc = alloc::CountingAlloc;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let result = match cli.command {
+        None => run::run(&cli.run, command),
+        Some(Command::Run(args)) => run::run(&args, command),
+        Some(Command::List { what }) => {
+            list(what);
+            Ok(())
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn list(what: ListWhat) {
+    let all = what == ListWhat::All;
+    if all || what == ListWhat::Scenes {
+        println!("scenes (built in; also grass-<N> and paths to .obj/.obj.gz/.gltf/.glb):");
+        for s in scenes::BUILTIN_SCENES {
+            println!("  {s}");
+        }
+    }
+    if all || what == ListWhat::Structures {
+        println!("structures:");
+        for s in kernels::STRUCTURES {
+            println!("  {:<10} {:<9} {}", s.name, s.family, s.summary);
+        }
+    }
+    if all || what == ListWhat::Backends {
+        println!("backends:\n  cpu        rayon over 8×8 tiles\n  gpu        wgpu + WGSL (not built yet)");
+    }
+    if all || what == ListWhat::Presets {
+        println!("presets:");
+        println!("  quick      bunny, teapot, dragon-11k, menger, flat at 256×256");
+        println!("  ci         every built-in scene but dragon and dragon-203k, at 256×256");
+        println!("  default    every built-in scene at 1024×1024 (the default)");
+    }
+}

@@ -1,1 +1,42 @@
-//! placeholder
+//! Traversal kernels over each structure's layout (DESIGN.md §5).
+//!
+//! | structure | CPU kernel | WGSL kernel |
+//! |---|---|---|
+//! | `bvh` | [`cpu::bvh`] | (issue 5) |
+//!
+//! [`Traverse`] is the CPU side of a structure's contract (the build/memory side is
+//! `structures::Structure`); [`registry`] pairs each builder with its kernels by name;
+//! [`cpu::render`] renders any of them over rayon 8×8 tiles.
+
+pub mod cpu;
+pub mod registry;
+pub mod stats;
+
+use glam::Vec3;
+use scenes::Ray;
+
+pub use registry::{Accel, STRUCTURES, StructureEntry, build_structure, find_structure};
+pub use stats::{Counters, NoStats, Stats};
+
+/// The nearest intersection found along a ray (DESIGN.md §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance along the ray, in units of its direction.
+    pub t: f32,
+    /// Unit geometric normal of the hit triangle (or voxel/contour normal), not face-forwarded.
+    pub normal: Vec3,
+    /// Triangle index, or the hit voxel's linear coordinate for voxel structures.
+    pub prim: u64,
+}
+
+/// Nearest-hit traversal of one structure, the CPU kernel side of the structure contract.
+pub trait Traverse: Send + Sync {
+    /// The nearest hit with `t_min < t < t_max`; the timed path (no counters).
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit>;
+    /// The same traversal, adding its steps, visits, primitive tests, pushes and pops to `counters`.
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit>;
+    /// Whether anything lies on the ray in `(t_min, t_max)` (shadow and AO rays).
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.intersect(ray, t_min, t_max).is_some()
+    }
+}

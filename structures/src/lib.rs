@@ -1,1 +1,48 @@
-//! placeholder
+//! Acceleration-structure builders and their exact memory layouts (DESIGN.md §2–4).
+//!
+//! Each structure is one module holding its builder and its layout; the layout is exactly what
+//! the traversal kernels in the `kernels` crate read (and, for the GPU, upload), so the memory a
+//! structure reports is the memory its kernels touch. Traversal lives in `kernels`, next to the
+//! WGSL version of the same loop.
+//!
+//! | module | structure | spec |
+//! |---|---|---|
+//! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
+
+pub mod bvh;
+pub mod memory;
+pub mod params;
+
+use std::sync::Arc;
+
+use scenes::{Scene, Triangle};
+
+pub use memory::MemoryReport;
+pub use params::Params;
+
+/// What every structure offers the harness, whatever its family.
+pub trait Structure: Send + Sync {
+    /// The name used on the command line and in results (`bvh`, `org`, `esvo`, …).
+    fn name(&self) -> &'static str;
+    /// Bytes by named component, plus N_c (nodes or cells) and N_p (pointers or references).
+    fn memory(&self) -> MemoryReport;
+    /// The parameters the structure was built with, resolved to their values (defaults included),
+    /// so results record exactly what was measured.
+    fn params(&self) -> serde_json::Value;
+}
+
+/// The input of every builder.
+pub struct BuildInput<'a> {
+    pub scene: &'a Scene,
+    /// The scene's triangle soup, shared by every triangle structure (not counted in their memory).
+    pub triangles: Arc<[Triangle]>,
+    pub params: &'a Params,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    #[error("parameter '{key}': {detail}")]
+    BadParam { key: String, detail: String },
+    #[error("{structure}: {detail}")]
+    Limit { structure: &'static str, detail: String },
+}

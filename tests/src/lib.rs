@@ -1,1 +1,106 @@
-//! Shared helpers for the cross-crate tests in tests/tests/.
+//! Shared helpers for the cross-crate tests in `tests/tests/`: the ray sets every structure is
+//! checked on, and the comparison against brute force.
+
+use glam::Vec3;
+use kernels::Traverse;
+use kernels::cpu::brute_force;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use scenes::{Camera, Ray, Scene, Triangle};
+
+/// A labelled test ray, so a failure says which kind of ray broke.
+#[derive(Clone, Copy, Debug)]
+pub struct TestRay {
+    pub kind: &'static str,
+    pub ray: Ray,
+}
+
+/// At least `n` rays over `scene`, deterministic from `seed`, in six kinds:
+/// - `aimed`: from outside the bounds towards a random point of a random triangle;
+/// - `random`: random origins in the (slightly enlarged) bounds — many start inside — and random
+///   directions;
+/// - `axis`: axis-parallel (±X, ±Y, ±Z) from random origins, so reciprocals are ±inf;
+/// - `vertex-axis`: axis-parallel rays through a mesh vertex exactly (grazing every box and
+///   triangle that shares it);
+/// - `edge`: rays lying along a triangle edge, starting at one of its vertices;
+/// - `camera`: primary rays of the canonical camera at random pixels.
+pub fn ray_set(scene: &Scene, triangles: &[Triangle], n: usize, seed: u64) -> Vec<TestRay> {
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let b = scene.bounds();
+    let (lo, hi) = (b.min - b.extent() * 0.1, b.max + b.extent() * 0.1);
+    let diag = b.diagonal().max(1e-3);
+    let camera = Camera::new(scene.camera_spec(), 512, 512);
+    let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
+    let per_kind = n.div_ceil(6);
+    let mut rays = Vec::with_capacity(per_kind * 6);
+    for _ in 0..per_kind {
+        let tri = triangles[rng.random_range(0..triangles.len())];
+        let (u, v): (f32, f32) = (rng.random(), rng.random());
+        let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+        let target = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
+        let dir = random_unit(&mut rng);
+        rays.push(TestRay { kind: "aimed", ray: Ray::new(target - dir * 2.0 * diag, dir) });
+
+        let origin = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+        rays.push(TestRay { kind: "random", ray: Ray::new(origin, random_unit(&mut rng)) });
+
+        let origin = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+        rays.push(TestRay { kind: "axis", ray: Ray::new(origin, axes[rng.random_range(0..6)]) });
+
+        let vertex = tri[rng.random_range(0..3)];
+        let axis = axes[rng.random_range(0..6)];
+        rays.push(TestRay { kind: "vertex-axis", ray: Ray::new(vertex - axis * 2.0 * diag, axis) });
+
+        let k = rng.random_range(0..3);
+        let (a, c) = (tri[k], tri[(k + 1) % 3]);
+        if let Some(dir) = (c - a).try_normalize() {
+            rays.push(TestRay { kind: "edge", ray: Ray::new(a, dir) });
+        }
+
+        let (x, y) = (rng.random_range(0..camera.width), rng.random_range(0..camera.height));
+        rays.push(TestRay { kind: "camera", ray: camera.ray(x, y) });
+    }
+    rays
+}
+
+pub fn random_unit(rng: &mut Pcg64Mcg) -> Vec3 {
+    loop {
+        let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let len2 = v.length_squared();
+        if len2 > 1e-4 && len2 <= 1.0 {
+            return v / len2.sqrt();
+        }
+    }
+}
+
+/// A disagreement between a structure and brute force on one ray.
+#[derive(Debug)]
+pub struct Mismatch {
+    pub ray: TestRay,
+    pub got: Option<(f32, u64)>,
+    pub expected_t: f32,
+    pub expected_prims: Vec<u64>,
+}
+
+/// Relative `t` tolerance between hits on different triangles that tie (coplanar neighbours,
+/// shared edges): their computed `t` may differ by a few ulps for the same surface point.
+pub const TIE_REL_T: f32 = 1e-6;
+
+/// Checks `accel` against brute force on every ray: the same hit/miss and either the same
+/// triangle as one of those brute force finds at its nearest `t` (several on shared edges) with
+/// the same `t` bit for bit — both use the one shared triangle test — or, where triangles tie,
+/// a `t` within [`TIE_REL_T`]. Returns the disagreements.
+pub fn compare_with_brute_force(accel: &dyn Traverse, triangles: &[Triangle], rays: &[TestRay]) -> Vec<Mismatch> {
+    use rayon::prelude::*;
+    rays.par_iter()
+        .filter_map(|r| {
+            let got = accel.intersect(&r.ray, 0.0, f32::INFINITY).map(|h| (h.t, h.prim));
+            let (t, set) = brute_force::nearest_set(triangles, &r.ray, 0.0, f32::INFINITY);
+            let ok = match got {
+                None => set.is_empty(),
+                Some((gt, prim)) => (gt == t && set.contains(&prim)) || (gt - t).abs() <= TIE_REL_T * t.abs(),
+            };
+            (!ok).then(|| Mismatch { ray: *r, got, expected_t: t, expected_prims: set })
+        })
+        .collect()
+}

@@ -1,10 +1,406 @@
-//! glTF/GLB loading through the `gltf` crate (STUB: being written).
+//! glTF 2.0 / GLB loading through the `gltf` crate.
+//!
+//! What is loaded: the default scene (else the first scene, else every root node), walked from
+//! its root nodes with each node's transform applied (parent × child). Every primitive of every
+//! mesh a node refers to is collected. Triangle lists are taken as they are; triangle strips and
+//! fans are converted to lists (glTF 2.0 §3.7.2.1 vertex order); points and lines are skipped.
+//! Non-indexed primitives use their vertices in order. POSITION is required, NORMAL and COLOR_0
+//! are kept when present (see [`Mesh::append`] for how attributes missing on one side are filled).
+//!
+//! Errors name the element, e.g. `mesh "Cube" primitive 0 POSITION[5]`.
+//!
+//! Bad input must never panic, and the `gltf` crate trusts its input in places: its validator
+//! indexes the POSITION accessor unchecked, its accessor reader asserts element sizes (a
+//! `byteStride` smaller than the element panics), hits `unreachable!` on index or colour types
+//! the spec forbids, and underflows on `count: 0`. So we check those first: the POSITION
+//! accessor index before validation ([`open`]), and every accessor's type, stride and byte
+//! range against its buffer before reading it ([`check_accessor`]). Buffers are resolved here,
+//! not with `gltf::import`, which unwraps the percent-decoding of external URIs; that also
+//! keeps the exact byte count of a data URI, so a short one is reported as Truncated.
+//! Sparse accessors are rejected as Unsupported; a node reached twice (a cycle, or two
+//! parents, which glTF forbids) is Malformed.
+
 use std::path::Path;
 
-use crate::error::SceneError;
+use glam::{Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+
+use crate::error::{Location, SceneError};
 use crate::mesh::Mesh;
 
+/// Parses a `.gltf` (JSON) or `.glb` file. `base_dir` resolves external buffer files; data URIs
+/// and the GLB binary chunk need none.
 pub fn parse_gltf(path: &str, bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, SceneError> {
-    let _ = (path, bytes, base_dir);
-    todo!("gltf loader")
+    let gltf::Gltf { document, blob } = open(path, bytes)?;
+    let buffers = load_buffers(path, &document, blob, base_dir)?;
+    let name = Path::new(path).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut mesh = Mesh::new(name, provenance(path, &document));
+    let mut skipped = Vec::new();
+    for (node, transform) in scene_nodes(path, &document)? {
+        let Some(node_mesh) = node.mesh() else { continue };
+        for primitive in node_mesh.primitives() {
+            let label =
+                format!("{} primitive {}", named("mesh", node_mesh.name(), node_mesh.index()), primitive.index());
+            match read_primitive(path, &label, &primitive, &buffers)? {
+                Some(part) => append(path, &mut mesh, &part, transform, &node)?,
+                None => skipped.push(format!("{label} ({:?})", primitive.mode())),
+            }
+        }
+    }
+    if mesh.indices.is_empty() {
+        // A mesh used by several nodes is listed once.
+        skipped.sort();
+        skipped.dedup();
+        let detail = match skipped.is_empty() {
+            true => "the scene has no triangle primitives".to_string(),
+            false => format!("the scene has no triangle primitives; skipped {}", skipped.join(", ")),
+        };
+        return Err(SceneError::Empty { path: path.into(), detail });
+    }
+    mesh.validate(path)?;
+    Ok(mesh)
+}
+
+fn named(kind: &str, name: Option<&str>, index: usize) -> String {
+    match name {
+        Some(name) => format!("{kind} \"{name}\""),
+        None => format!("{kind} {index}"),
+    }
+}
+
+fn provenance(path: &str, document: &gltf::Document) -> String {
+    match &document.as_json().asset.generator {
+        Some(generator) => format!("{path} (generator: {generator})"),
+        None => path.to_string(),
+    }
+}
+
+fn malformed(path: &str, element: impl Into<String>, detail: impl Into<String>) -> SceneError {
+    SceneError::Malformed { path: path.into(), location: Location::Element(element.into()), detail: detail.into() }
+}
+
+fn truncated(path: &str, element: impl Into<String>, detail: impl Into<String>) -> SceneError {
+    SceneError::Truncated { path: path.into(), location: Location::Element(element.into()), detail: detail.into() }
+}
+
+/// Parses and validates the JSON (or GLB container), guarding the crate's panics first.
+fn open(path: &str, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    if bytes.starts_with(b"glTF") {
+        check_glb_header(path, bytes)?;
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| open_error(path, e))?;
+    let json = gltf.document.as_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive.attributes.get(&gltf::json::validation::Checked::Valid(Semantic::Positions));
+            if let Some(index) = position.filter(|i| i.value() >= json.accessors.len()) {
+                let element = format!("meshes[{m}].primitives[{p}].attributes[\"POSITION\"]");
+                return Err(malformed(path, element, format!("accessor {index} does not exist")));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(gltf.document.into_json()).map_err(|e| open_error(path, e))?;
+    Ok(gltf::Gltf { document, blob: gltf.blob })
+}
+
+/// A GLB whose header promises more bytes than the file holds was cut short.
+fn check_glb_header(path: &str, bytes: &[u8]) -> Result<(), SceneError> {
+    let declared = bytes.get(8..12).and_then(|b| b.try_into().ok()).map(u32::from_le_bytes);
+    match declared {
+        None => Err(truncated(path, "GLB header", format!("the file is {} bytes, a GLB header needs 12", bytes.len()))),
+        Some(n) if (n as usize) < 12 => {
+            Err(malformed(path, "GLB header", format!("declared length {n} is shorter than the header")))
+        }
+        Some(n) if n as usize > bytes.len() => {
+            Err(truncated(path, "GLB header", format!("the file is {} bytes, but its header says {n}", bytes.len())))
+        }
+        Some(_) => Ok(()),
+    }
+}
+
+fn open_error(path: &str, err: gltf::Error) -> SceneError {
+    use gltf::binary::Error as Glb;
+    match err {
+        gltf::Error::Deserialize(e) => {
+            let at = format!("JSON line {} column {}", e.line(), e.column());
+            match e.is_eof() {
+                true => truncated(path, at, format!("the JSON ends early: {e}")),
+                false => malformed(path, at, format!("invalid glTF JSON: {e}")),
+            }
+        }
+        gltf::Error::Binary(Glb::ChunkLength { ty, length, length_read }) => truncated(
+            path,
+            format!("GLB {ty:?} chunk"),
+            format!("the chunk says {length} bytes, but only {length_read} remain"),
+        ),
+        gltf::Error::Binary(Glb::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            truncated(path, "GLB chunk header", "the file ends inside a chunk header")
+        }
+        gltf::Error::Binary(e) => malformed(path, "GLB container", e.to_string()),
+        gltf::Error::Validation(errors) => {
+            let (first, more) = errors.split_first().map_or((None, 0), |(f, rest)| (Some(f), rest.len()));
+            let element = first.map_or_else(|| "document".to_string(), |(p, _)| p.to_string());
+            let problem = first.map_or_else(String::new, |(_, e)| e.to_string());
+            let more = if more > 0 { format!(" (and {more} more validation errors)") } else { String::new() };
+            malformed(path, element, format!("{problem}{more}"))
+        }
+        other => SceneError::Malformed { path: path.into(), location: Location::File, detail: other.to_string() },
+    }
+}
+
+/// Resolves every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
+fn load_buffers(
+    path: &str,
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+    base_dir: Option<&Path>,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let element = format!("buffer {}", buffer.index());
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                blob.take().ok_or_else(|| malformed(path, &element, "refers to a GLB binary chunk the file lacks"))?
+            }
+            gltf::buffer::Source::Uri(uri) => read_uri(path, &element, uri, base_dir)?,
+        };
+        if data.len() < buffer.length() {
+            let detail = format!("holds {} bytes, but its byteLength is {}", data.len(), buffer.length());
+            return Err(truncated(path, element, detail));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
+}
+
+fn read_uri(path: &str, element: &str, uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, SceneError> {
+    let unsupported = |detail: String| SceneError::Unsupported {
+        path: path.into(),
+        location: Location::Element(element.into()),
+        detail,
+    };
+    if let Some(data) = uri.strip_prefix("data:") {
+        return match data.split_once(";base64,") {
+            Some((_, payload)) => {
+                decode_base64(payload).ok_or_else(|| malformed(path, element, "invalid base64 in data URI"))
+            }
+            None => Err(unsupported("only base64 data URIs are supported".into())),
+        };
+    }
+    if uri.contains(':') {
+        return Err(unsupported(format!("URI `{uri}`: only data URIs and relative file names are supported")));
+    }
+    let file = percent_decode(uri).ok_or_else(|| malformed(path, element, format!("URI `{uri}` has bad %-escapes")))?;
+    let dir = base_dir.ok_or_else(|| unsupported(format!("external file `{file}` needs the glTF file's directory")))?;
+    let full = dir.join(&file);
+    std::fs::read(&full)
+        .map_err(|source| SceneError::Io { path: format!("{} ({element} of {path})", full.display()), source })
+}
+
+/// Standard base64, padding optional. `None` on a character outside the alphabet.
+fn decode_base64(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(text.len() / 4 * 3 + 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in text.trim_end_matches('=').bytes() {
+        let value = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        };
+        acc = (acc << 6 | u32::from(value)) & 0xFFFF;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+        }
+    }
+    Some(out)
+}
+
+/// RFC 3986 percent-decoding of a relative URI into a file name.
+fn percent_decode(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while let Some(&b) = bytes.get(i) {
+        if b == b'%' {
+            let hex = bytes.get(i + 1..i + 3).filter(|h| h.iter().all(u8::is_ascii_hexdigit))?;
+            out.push(u8::from_str_radix(std::str::from_utf8(hex).ok()?, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// Every node of the scene with its world transform, depth first in document order.
+fn scene_nodes<'a>(path: &str, document: &'a gltf::Document) -> Result<Vec<(gltf::Node<'a>, Mat4)>, SceneError> {
+    let roots: Vec<gltf::Node<'a>> = match document.default_scene().or_else(|| document.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for child in document.nodes().flat_map(|n| n.children()) {
+                if let Some(flag) = is_child.get_mut(child.index()) {
+                    *flag = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect()
+        }
+    };
+    let mut seen = vec![false; document.nodes().len()];
+    let mut stack: Vec<_> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+    let mut out = Vec::new();
+    while let Some((node, parent)) = stack.pop() {
+        if seen.get_mut(node.index()).is_none_or(|seen| std::mem::replace(seen, true)) {
+            let detail = "is reached twice: glTF nodes must form trees (a cycle, or a node with two parents)";
+            return Err(malformed(path, named("node", node.name(), node.index()), detail));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        out.push((node, world));
+    }
+    Ok(out)
+}
+
+/// Appends a primitive under a node's transform; a transform that overflows a coordinate is
+/// blamed on the node.
+fn append(path: &str, mesh: &mut Mesh, part: &Mesh, transform: Mat4, node: &gltf::Node) -> Result<(), SceneError> {
+    let start = mesh.positions.len();
+    mesh.append(part, transform);
+    match mesh.positions[start..].iter().position(|p| !p.is_finite()) {
+        Some(i) => Err(SceneError::NonFinite {
+            path: path.into(),
+            location: Location::Element(format!("{} transform", named("node", node.name(), node.index()))),
+            detail: format!("vertex {:?} becomes {:?}", part.positions[i], mesh.positions[start + i]),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The valid types of COLOR_0.
+const COLOR_TYPES: [(DataType, Dimensions); 6] = [
+    (DataType::F32, Dimensions::Vec3),
+    (DataType::U8, Dimensions::Vec3),
+    (DataType::U16, Dimensions::Vec3),
+    (DataType::F32, Dimensions::Vec4),
+    (DataType::U8, Dimensions::Vec4),
+    (DataType::U16, Dimensions::Vec4),
+];
+
+/// Reads one primitive into an untransformed mesh; `None` for points and lines.
+fn read_primitive(
+    path: &str,
+    label: &str,
+    primitive: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+) -> Result<Option<Mesh>, SceneError> {
+    let mode = primitive.mode();
+    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        return Ok(None);
+    }
+    let element = |what: &str| format!("{label} {what}");
+    let accessor = primitive.get(&Semantic::Positions).ok_or_else(|| malformed(path, label, "has no POSITION"))?;
+    check_accessor(path, &element("POSITION"), &accessor, &[(DataType::F32, Dimensions::Vec3)], buffers)?;
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let positions: Vec<Vec3> = reader.read_positions().map(|it| it.map(Vec3::from).collect()).unwrap_or_default();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        let location = Location::Element(element(&format!("POSITION[{i}]")));
+        return Err(SceneError::NonFinite { path: path.into(), location, detail: format!("{:?}", positions[i]) });
+    }
+    let corners: Vec<u32> = match primitive.indices() {
+        Some(accessor) => {
+            let scalar = [DataType::U8, DataType::U16, DataType::U32].map(|t| (t, Dimensions::Scalar));
+            check_accessor(path, &element("indices"), &accessor, &scalar, buffers)?;
+            reader.read_indices().map(|r| r.into_u32().collect()).unwrap_or_default()
+        }
+        None => (0..positions.len() as u32).collect(),
+    };
+    let vertex_count = positions.len();
+    if let Some(k) = corners.iter().position(|&i| i as usize >= vertex_count) {
+        let (location, index) = (Location::Element(element(&format!("indices[{k}]"))), i64::from(corners[k]));
+        return Err(SceneError::IndexOutOfRange { path: path.into(), location, index, vertex_count });
+    }
+    let indices = assemble(mode, &corners).map_err(|d| malformed(path, element("indices"), d))?;
+    let mut part = Mesh { positions, indices, ..Mesh::default() };
+    let check = |name: &str, semantic, allowed: &[_]| {
+        let Some(accessor) = primitive.get(&semantic) else { return Ok(false) };
+        check_accessor(path, &element(name), &accessor, allowed, buffers)?;
+        match accessor.count() {
+            n if n == vertex_count => Ok(true),
+            n => Err(malformed(path, element(name), format!("{n} values for {vertex_count} positions"))),
+        }
+    };
+    if check("NORMAL", Semantic::Normals, &[(DataType::F32, Dimensions::Vec3)])? {
+        part.normals = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+    }
+    if check("COLOR_0", Semantic::Colors(0), &COLOR_TYPES)? {
+        part.colors = reader.read_colors(0).map(|c| c.into_rgb_f32().map(Vec3::from).collect());
+    }
+    Ok(Some(part))
+}
+
+/// Triangle lists from a primitive's corner list (glTF 2.0 §3.7.2.1).
+fn assemble(mode: Mode, corners: &[u32]) -> Result<Vec<[u32; 3]>, String> {
+    let n = corners.len();
+    Ok(match mode {
+        Mode::TriangleStrip => corners
+            .windows(3)
+            .enumerate()
+            .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[0], w[2], w[1]] })
+            .collect(),
+        Mode::TriangleFan => {
+            corners.get(1..).unwrap_or_default().windows(2).map(|w| [w[0], w[1], corners[0]]).collect()
+        }
+        _ if !n.is_multiple_of(3) => return Err(format!("{n} indices is not a multiple of 3")),
+        _ => corners.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    })
+}
+
+/// Checks what the `gltf` reader assumes without checking (see the module docs), so that
+/// reading the accessor afterwards cannot panic or read out of range.
+fn check_accessor(
+    path: &str,
+    element: &str,
+    accessor: &gltf::Accessor,
+    allowed: &[(DataType, Dimensions)],
+    buffers: &[Vec<u8>],
+) -> Result<(), SceneError> {
+    let element = format!("{element} (accessor {})", accessor.index());
+    if accessor.sparse().is_some() {
+        let detail = "sparse accessors are not supported".into();
+        return Err(SceneError::Unsupported { path: path.into(), location: Location::Element(element), detail });
+    }
+    let kind = (accessor.data_type(), accessor.dimensions());
+    if !allowed.contains(&kind) {
+        return Err(malformed(path, element, format!("{:?} of {:?} is not allowed here", kind.1, kind.0)));
+    }
+    let Some(view) = accessor.view() else { return Err(malformed(path, element, "has no bufferView")) };
+    let (size, count) = (accessor.size(), accessor.count());
+    let stride = view.stride().unwrap_or(size);
+    if count == 0 || stride < size {
+        return Err(malformed(path, element, format!("count {count}, byteStride {stride} for {size}-byte elements")));
+    }
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|b| b.checked_add(size))
+        .and_then(|b| b.checked_add(accessor.offset()));
+    if end.is_none_or(|end| end > view.length()) {
+        let detail = format!("reads past the end of bufferView {} ({} bytes)", view.index(), view.length());
+        return Err(malformed(path, element, detail));
+    }
+    let buffer = view.buffer();
+    let available = buffers.get(buffer.index()).map_or(0, Vec::len).min(buffer.length());
+    if view.offset().checked_add(view.length()).is_none_or(|end| end > available) {
+        let detail =
+            format!("bufferView {} ends past the end of buffer {} ({} bytes)", view.index(), buffer.index(), available);
+        return Err(malformed(path, element, detail));
+    }
+    Ok(())
 }

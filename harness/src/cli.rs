@@ -1,0 +1,201 @@
+//! The command line (DESIGN.md §7): `run` (the default), `list`; presets fill in whatever the
+//! user does not say.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "harness",
+    version,
+    about = "accel-bench: build ray-tracing acceleration structures over a shared scene set, cast rays \
+             through them, and report memory, build time and render time",
+    long_about = None,
+    args_conflicts_with_subcommands = true
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Options of `run`, the default subcommand.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Build and time every (scene, structure, backend) of the matrix; write results and a report.
+    Run(RunArgs),
+    /// List scenes, structures, backends or presets.
+    List {
+        #[arg(value_enum, default_value_t = ListWhat::All)]
+        what: ListWhat,
+    },
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListWhat {
+    All,
+    Scenes,
+    Structures,
+    Backends,
+    Presets,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// A few small scenes at 256×256: a smoke test in seconds.
+    Quick,
+    /// Every built-in scene except the two largest dragons, at 256×256: small enough for CI.
+    Ci,
+    /// Every built-in scene at 1024×1024.
+    Default,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    Cpu,
+    Gpu,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WorkloadArg {
+    /// One primary ray per pixel.
+    Primary,
+    /// Primary plus one shadow ray to the scene's point light per hit.
+    Shadow,
+    /// Primary plus --ao-samples ambient-occlusion rays per hit.
+    Ao,
+}
+
+#[derive(Args, Debug, Clone, Default)]
+pub struct RunArgs {
+    /// Preset that supplies defaults for scenes, structures, image size and repetitions.
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
+    /// Scenes, comma-separated: built-in names (see `harness list scenes`), grass-<N>, or paths to
+    /// .obj, .obj.gz, .gltf, .glb files.
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Vec<String>,
+    /// Structures, comma-separated (see `harness list structures`).
+    #[arg(long, value_delimiter = ',')]
+    pub structures: Vec<String>,
+    /// Backends, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub backend: Vec<Backend>,
+    /// Shorthand for adding the GPU backend.
+    #[arg(long)]
+    pub gpu: bool,
+    /// Workloads, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub workload: Vec<WorkloadArg>,
+    /// Ambient-occlusion rays per primary hit for the `ao` workload.
+    #[arg(long, default_value_t = 4)]
+    pub ao_samples: u32,
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Worker threads for builds and renders (default: all logical cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Timed repetitions per build and per render (at least 5 for results that count).
+    #[arg(long)]
+    pub reps: Option<u32>,
+    /// Untimed warm-up repetitions before the timed ones.
+    #[arg(long)]
+    pub warmup: Option<u32>,
+    /// Structure parameter as key=value (repeatable), e.g. --param bvh.preset=fast.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// Write results.json, report.md and images/ directly into DIR instead of results/<run-id>/.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Where run directories and the `latest` link go when --out is not given.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub results_dir: PathBuf,
+    /// Skip writing PNG images.
+    #[arg(long)]
+    pub no_images: bool,
+    /// Seed of the randomised workloads (AO directions).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Time code even if the harness was compiled without optimisation (numbers are then meaningless).
+    #[arg(long)]
+    pub allow_unoptimized: bool,
+}
+
+/// Everything a run needs, with presets applied.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub preset: Preset,
+    pub scenes: Vec<String>,
+    pub structures: Vec<String>,
+    pub backends: Vec<Backend>,
+    pub workloads: Vec<kernels::cpu::render::Workload>,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    pub warmup: u32,
+    pub reps: u32,
+}
+
+const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
+
+impl Preset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Quick => "quick",
+            Preset::Ci => "ci",
+            Preset::Default => "default",
+        }
+    }
+
+    fn scenes(self) -> Vec<String> {
+        let list: Vec<&str> = match self {
+            Preset::Quick => QUICK_SCENES.to_vec(),
+            Preset::Ci => scenes::BUILTIN_SCENES.iter().copied().filter(|s| !matches!(*s, "dragon" | "dragon-203k")).collect(),
+            Preset::Default => scenes::BUILTIN_SCENES.to_vec(),
+        };
+        list.into_iter().map(String::from).collect()
+    }
+
+    fn size(self) -> (u32, u32) {
+        match self {
+            Preset::Quick | Preset::Ci => (256, 256),
+            Preset::Default => (1024, 1024),
+        }
+    }
+}
+
+impl RunArgs {
+    pub fn plan(&self) -> Plan {
+        let preset = self.preset.unwrap_or(Preset::Default);
+        let (w, h) = preset.size();
+        let mut backends = if self.backend.is_empty() { vec![Backend::Cpu] } else { self.backend.clone() };
+        if self.gpu && !backends.contains(&Backend::Gpu) {
+            backends.push(Backend::Gpu);
+        }
+        let workloads = if self.workload.is_empty() { vec![WorkloadArg::Primary] } else { self.workload.clone() };
+        use kernels::cpu::render::Workload;
+        Plan {
+            preset,
+            scenes: if self.scenes.is_empty() { preset.scenes() } else { self.scenes.clone() },
+            structures: if self.structures.is_empty() { vec!["bvh".into()] } else { self.structures.clone() },
+            backends,
+            workloads: workloads
+                .into_iter()
+                .map(|w| match w {
+                    WorkloadArg::Primary => Workload::Primary,
+                    WorkloadArg::Shadow => Workload::Shadow,
+                    WorkloadArg::Ao => Workload::Ao { samples: self.ao_samples },
+                })
+                .collect(),
+            width: self.width.unwrap_or(w),
+            height: self.height.unwrap_or(h),
+            threads: self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
+            warmup: self.warmup.unwrap_or(1),
+            reps: self.reps.unwrap_or(5),
+        }
+    }
+}

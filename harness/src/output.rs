@@ -1,0 +1,79 @@
+//! Where a run's files go. Every finished case is appended to `cases.jsonl` and `results.json`
+//! and `report.md` are rewritten (each through a temporary file and a rename), so a crash loses
+//! only the case in flight and never leaves a half-written file.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use reports::{Case, Results};
+
+pub struct RunOutput {
+    pub dir: PathBuf,
+    pub results: Results,
+    jsonl: File,
+}
+
+impl RunOutput {
+    /// Creates the run directory: `out` if given, else `results_dir/<run-id>` with
+    /// `results_dir/latest` pointing at it.
+    pub fn create(out: Option<&Path>, results_dir: &Path, results: Results) -> Result<Self> {
+        let dir = match out {
+            Some(dir) => dir.to_path_buf(),
+            None => results_dir.join(&results.run_id),
+        };
+        fs::create_dir_all(dir.join("images")).with_context(|| format!("creating {}", dir.display()))?;
+        if out.is_none() {
+            link_latest(results_dir, &results.run_id)?;
+        }
+        let jsonl_path = dir.join("cases.jsonl");
+        let jsonl = OpenOptions::new()
+            .create(true)
+            .write(true)
+            .truncate(true)
+            .open(&jsonl_path)
+            .with_context(|| format!("creating {}", jsonl_path.display()))?;
+        let mut run = Self { dir, results, jsonl };
+        run.write_summary()?;
+        Ok(run)
+    }
+
+    pub fn images_dir(&self) -> PathBuf {
+        self.dir.join("images")
+    }
+
+    /// Records a finished case on disk at once.
+    pub fn push_case(&mut self, case: Case) -> Result<()> {
+        serde_json::to_writer(&mut self.jsonl, &case)?;
+        self.jsonl.write_all(b"\n")?;
+        self.jsonl.flush()?;
+        self.results.cases.push(case);
+        self.write_summary()
+    }
+
+    fn write_summary(&mut self) -> Result<()> {
+        write_atomic(&self.dir.join("results.json"), &serde_json::to_vec_pretty(&self.results)?)?;
+        write_atomic(&self.dir.join("report.md"), reports::markdown::report(&self.results).as_bytes())
+    }
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension("tmp");
+    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+}
+
+#[cfg(unix)]
+fn link_latest(results_dir: &Path, run_id: &str) -> Result<()> {
+    let link = results_dir.join("latest");
+    if link.symlink_metadata().is_ok() {
+        fs::remove_file(&link).with_context(|| format!("replacing {}", link.display()))?;
+    }
+    std::os::unix::fs::symlink(run_id, &link).with_context(|| format!("linking {}", link.display()))
+}
+
+#[cfg(not(unix))]
+fn link_latest(results_dir: &Path, run_id: &str) -> Result<()> {
+    fs::write(results_dir.join("latest.txt"), run_id).context("writing latest.txt")
+}

@@ -1,0 +1,329 @@
+//! The benchmark matrix: for every scene, every structure, every backend and workload — build
+//! (warm-up + timed reps), measure memory, render (warm-up + timed reps), count traversal work in
+//! a separate pass, check agreement with the reference, write images, and record the case.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use kernels::cpu::render::{self, Frame, ShadeContext, Workload};
+use kernels::{Accel, StructureEntry};
+use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, Timing};
+use scenes::{Camera, Scene, Triangle};
+use structures::{BuildInput, Params};
+
+use crate::agreement;
+use crate::alloc;
+use crate::cli::{Backend, Plan, RunArgs};
+use crate::images;
+use crate::machine;
+use crate::output::RunOutput;
+
+/// The structure every other one is checked against, and that is checked against brute force.
+const REFERENCE: &str = "bvh";
+
+pub fn run(args: &RunArgs, command: String) -> Result<()> {
+    check_optimised(args.allow_unoptimized)?;
+    let plan = args.plan();
+    validate(&plan)?;
+    let params = Params::parse(args.params.iter().map(String::as_str))?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
+
+    let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
+    let run_id = created.replace(['-', ':'], "").replace('T', "-").trim_end_matches('Z').to_string();
+    let results = Results {
+        schema: reports::SCHEMA.into(),
+        run_id,
+        created,
+        machine: machine::machine(),
+        git: machine::git(),
+        settings: settings(&plan, &params, command),
+        cases: Vec::new(),
+    };
+    let mut out = RunOutput::create(args.out.as_deref(), &args.results_dir, results)?;
+    eprintln!("accel-bench: writing {}", out.dir.display());
+
+    let cases = (plan.scenes.len() * plan.structures.len()) as u64;
+    let bar = ProgressBar::new(cases).with_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases  {wide_msg}")
+            .context("progress template")?,
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let started = Instant::now();
+    pool.install(|| -> Result<()> {
+        for scene_name in &plan.scenes {
+            bar.set_message(format!("{scene_name}: loading"));
+            let t = Instant::now();
+            let scene = scenes::load_scene(scene_name).with_context(|| format!("scene '{scene_name}'"))?;
+            let load_ms = ms_since(t);
+            let mut ctx = SceneRun::new(&scene, load_ms);
+            for structure in &plan.structures {
+                let case = measure_case(&mut ctx, structure, &params, &plan, args, &out, &bar)
+                    .with_context(|| format!("scene '{scene_name}', structure '{structure}'"))?;
+                bar.suspend(|| eprintln!("{}", one_line(&case)));
+                out.push_case(case)?;
+                bar.inc(1);
+            }
+        }
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    eprintln!(
+        "accel-bench: {} cases in {:.1} s; results in {}",
+        out.results.cases.len(),
+        started.elapsed().as_secs_f64(),
+        out.dir.display()
+    );
+    Ok(())
+}
+
+/// Refuses to time a build without optimisation unless told to (DESIGN.md §1).
+fn check_optimised(allow: bool) -> Result<()> {
+    let opt = env!("ACCEL_BENCH_OPT_LEVEL");
+    if matches!(opt, "0" | "1") && !allow {
+        bail!(
+            "this harness was compiled at opt-level {opt}, so its timings would be meaningless; \
+             use the workspace's profiles (`cargo run -p harness` or `--release`) or pass --allow-unoptimized"
+        );
+    }
+    Ok(())
+}
+
+fn validate(plan: &Plan) -> Result<()> {
+    for s in &plan.structures {
+        if kernels::find_structure(s).is_none() {
+            let known: Vec<&str> = kernels::STRUCTURES.iter().map(|e| e.name).collect();
+            bail!("unknown structure '{s}' (known: {})", known.join(", "));
+        }
+    }
+    if plan.backends.contains(&Backend::Gpu) {
+        bail!("the GPU backend (wgpu + WGSL kernels) is not built yet; run with --backend cpu");
+    }
+    if plan.width == 0 || plan.height == 0 || plan.reps == 0 || plan.threads == 0 {
+        bail!("--width, --height, --reps and --threads must be at least 1");
+    }
+    if plan.reps < 5 {
+        eprintln!("accel-bench: warning: {} timed reps; results that count use at least 5", plan.reps);
+    }
+    Ok(())
+}
+
+fn settings(plan: &Plan, params: &Params, command: String) -> Settings {
+    Settings {
+        preset: plan.preset.name().into(),
+        command,
+        scenes: plan.scenes.clone(),
+        structures: plan.structures.clone(),
+        backends: plan.backends.iter().map(|b| backend_name(*b).to_string()).collect(),
+        workloads: plan.workloads.iter().map(Workload::name).collect(),
+        width: plan.width,
+        height: plan.height,
+        threads: plan.threads,
+        warmup: plan.warmup,
+        reps: plan.reps,
+        build_profile: format!(
+            "{} (opt-level {}, debug-assertions {})",
+            env!("ACCEL_BENCH_PROFILE"),
+            env!("ACCEL_BENCH_OPT_LEVEL"),
+            env!("ACCEL_BENCH_DEBUG_ASSERTIONS")
+        ),
+        params: params.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+    }
+}
+
+fn backend_name(b: Backend) -> &'static str {
+    match b {
+        Backend::Cpu => "cpu",
+        Backend::Gpu => "gpu",
+    }
+}
+
+/// Per-scene state shared by its cases: the triangle soup and the reference's primary frame.
+struct SceneRun<'a> {
+    scene: &'a Scene,
+    triangles: Arc<[Triangle]>,
+    load_ms: f64,
+    degenerate: u64,
+    /// The reference structure's primary frame, once rendered.
+    reference_frame: Option<Frame>,
+}
+
+impl<'a> SceneRun<'a> {
+    fn new(scene: &'a Scene, load_ms: f64) -> Self {
+        Self {
+            scene,
+            triangles: scene.triangles(),
+            load_ms,
+            degenerate: scene.mesh.degenerate_count() as u64,
+            reference_frame: None,
+        }
+    }
+}
+
+fn measure_case(
+    ctx: &mut SceneRun,
+    structure: &str,
+    params: &Params,
+    plan: &Plan,
+    args: &RunArgs,
+    out: &RunOutput,
+    bar: &ProgressBar,
+) -> Result<Case> {
+    let entry = kernels::find_structure(structure).context("unknown structure")?;
+    let scene = ctx.scene;
+    bar.set_message(format!("{}/{structure}: building", scene.name));
+    let input = BuildInput { scene, triangles: ctx.triangles.clone(), params };
+    let (accel, build) = timed_builds(entry, &input, plan)?;
+    let memory = accel.memory();
+    let mut case = Case {
+        scene: scene.name.clone(),
+        scene_provenance: scene.provenance.clone(),
+        triangles: scene.triangle_count() as u64,
+        degenerate_triangles: ctx.degenerate,
+        scene_load_ms: ctx.load_ms,
+        structure: structure.into(),
+        params: accel.params(),
+        resolution: None,
+        build,
+        memory: MemoryStats {
+            bytes: memory.total_bytes(),
+            components: memory.components.iter().cloned().collect(),
+            nodes: memory.nodes,
+            pointers: memory.pointers,
+        },
+        render: Vec::new(),
+        images: Vec::new(),
+    };
+    let camera = Camera::new(scene.camera_spec(), plan.width, plan.height);
+    let shade = ShadeContext::for_scene(scene, args.seed);
+    for &backend in &plan.backends {
+        for &workload in &plan.workloads {
+            bar.set_message(format!("{}/{structure}: rendering {} on {}", scene.name, workload.name(), backend_name(backend)));
+            let (stats, frame, heat) = timed_renders(accel.as_ref(), &camera, &shade, workload, plan);
+            let mut stats = stats;
+            if workload == Workload::Primary {
+                bar.set_message(format!("{}/{structure}: checking against the reference", scene.name));
+                stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
+            }
+            if !args.no_images {
+                let stem = format!("{}__{structure}__{}__{}", scene.name, backend_name(backend), workload.name());
+                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, &heat)?);
+            }
+            if structure == REFERENCE && workload == Workload::Primary && ctx.reference_frame.is_none() {
+                ctx.reference_frame = Some(frame);
+            }
+            case.render.push(stats);
+        }
+    }
+    Ok(case)
+}
+
+/// Builds `warmup + reps` times; times the last `reps`; keeps the last structure.
+fn timed_builds(entry: &StructureEntry, input: &BuildInput, plan: &Plan) -> Result<(Box<dyn Accel>, BuildStats)> {
+    let mut samples = Vec::new();
+    let mut peak = 0usize;
+    let mut built: Option<Box<dyn Accel>> = None;
+    for i in 0..plan.warmup + plan.reps {
+        drop(built.take());
+        let base = alloc::reset_peak();
+        let t = Instant::now();
+        let s = (entry.build)(input)?;
+        let ms = ms_since(t);
+        peak = peak.max(alloc::peak_bytes().saturating_sub(base));
+        if i >= plan.warmup {
+            samples.push(ms);
+        }
+        built = Some(s);
+    }
+    let accel = built.context("no build ran")?;
+    Ok((accel, BuildStats { timing: Timing::from_samples(&samples), peak_bytes: peak as u64 }))
+}
+
+/// Renders `warmup + reps` times without counters (timed), then once with counters.
+fn timed_renders(
+    accel: &dyn Accel,
+    camera: &Camera,
+    shade: &ShadeContext,
+    workload: Workload,
+    plan: &Plan,
+) -> (RenderStats, Frame, Vec<f32>) {
+    let mut samples = Vec::new();
+    let mut frame = None;
+    for i in 0..plan.warmup + plan.reps {
+        let t = Instant::now();
+        let f = render::render(accel, camera, shade, workload);
+        let ms = ms_since(t);
+        if i >= plan.warmup {
+            samples.push(ms);
+        }
+        frame = Some(f);
+    }
+    let (counted, counters) = render::render_counted(accel, camera, shade, workload);
+    let frame = frame.unwrap_or_else(|| counted.clone());
+    let totals = counters.total();
+    let rays = counted.rays as f64;
+    let timing = Timing::from_samples(&samples);
+    let heat: Vec<f32> = counted.pixels().map(|(x, y, _)| counters.at(&counted, x, y).steps as f32).collect();
+    let stats = RenderStats {
+        backend: "cpu".into(),
+        device: machine::machine().cpu,
+        threads: plan.threads,
+        width: camera.width,
+        height: camera.height,
+        workload: workload.name(),
+        rays: frame.rays,
+        mrays_per_s: if timing.ms_median > 0.0 { frame.rays as f64 / (timing.ms_median * 1e3) } else { 0.0 },
+        timing,
+        steps_per_ray_mean: totals.steps as f64 / rays,
+        node_visits_per_ray_mean: totals.node_visits as f64 / rays,
+        prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
+        hit_fraction: frame.hit_fraction(),
+        agreement: None,
+    };
+    (stats, frame, heat)
+}
+
+/// The reference checks the reference against brute force on a pixel sample; every other
+/// structure is checked against the reference's frame on every pixel.
+fn check_agreement(
+    ctx: &mut SceneRun,
+    structure: &str,
+    frame: &Frame,
+    camera: &Camera,
+    params: &Params,
+) -> Result<reports::Agreement> {
+    if structure == REFERENCE {
+        return Ok(agreement::against_brute_force(frame, camera, &ctx.triangles));
+    }
+    if ctx.reference_frame.is_none() {
+        // The reference is not in this run's matrix: build and render it, untimed.
+        let input = BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params };
+        let reference = kernels::build_structure(REFERENCE, &input).context("the reference structure exists")??;
+        let shade = ShadeContext::for_scene(ctx.scene, 0);
+        ctx.reference_frame = Some(render::render(reference.as_ref(), camera, &shade, Workload::Primary));
+    }
+    let reference = ctx.reference_frame.as_ref().context("reference frame")?;
+    Ok(agreement::against_frame(frame, reference, REFERENCE))
+}
+
+fn one_line(case: &Case) -> String {
+    let renders: Vec<String> = case
+        .render
+        .iter()
+        .map(|r| format!("{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray", r.backend, r.workload, r.timing.ms_median, r.mrays_per_s, r.steps_per_ray_mean))
+        .collect();
+    format!(
+        "  {:<12} {:<6} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",
+        case.scene,
+        case.structure,
+        case.triangles,
+        case.build.timing.ms_median,
+        case.memory.bytes as f64 / (1u64 << 20) as f64,
+        renders.join("; ")
+    )
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}

@@ -1,0 +1,262 @@
+//! The CPU renderer (DESIGN.md §5): rayon over 8×8 pixel tiles, one primary ray per pixel through
+//! its centre, optional shadow or ambient-occlusion rays from each primary hit with a fixed seed.
+//!
+//! The frame is stored tile-major (tile after tile, 64 pixels each) so every rayon task writes one
+//! contiguous chunk; [`Frame::at`] hides the order.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::{Camera, Ray, Scene};
+
+use crate::{Counters, Traverse};
+
+pub const TILE: u32 = 8;
+const TILE_PIXELS: usize = (TILE * TILE) as usize;
+
+/// What each pixel casts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Workload {
+    /// One primary ray per pixel.
+    Primary,
+    /// Plus one shadow ray towards the scene's point light from each primary hit.
+    Shadow,
+    /// Plus `samples` cosine-distributed ambient-occlusion rays from each primary hit.
+    Ao { samples: u32 },
+}
+
+impl Workload {
+    pub fn name(&self) -> String {
+        match self {
+            Workload::Primary => "primary".into(),
+            Workload::Shadow => "shadow".into(),
+            Workload::Ao { samples } => format!("ao{samples}"),
+        }
+    }
+
+    /// Secondary rays cast per primary hit.
+    fn secondary_per_hit(&self) -> u64 {
+        match self {
+            Workload::Primary => 0,
+            Workload::Shadow => 1,
+            Workload::Ao { samples } => u64::from(*samples),
+        }
+    }
+}
+
+/// Scene-dependent constants for secondary rays.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadeContext {
+    pub light: Vec3,
+    /// Offset along the normal that lifts secondary-ray origins off the surface.
+    pub epsilon: f32,
+    /// Length of ambient-occlusion rays.
+    pub ao_radius: f32,
+    /// Seed of the ambient-occlusion directions.
+    pub seed: u32,
+}
+
+impl ShadeContext {
+    pub fn for_scene(scene: &Scene, seed: u32) -> Self {
+        let d = scene.bounds().diagonal().max(f32::MIN_POSITIVE);
+        Self { light: scene.light_position(), epsilon: 1e-4 * d, ao_radius: 0.05 * d, seed }
+    }
+}
+
+/// One pixel's result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Primary hit distance; `f32::INFINITY` for a miss.
+    pub t: f32,
+    /// Brightness in [0, 1]: |n·d| for primary, lit-and-visible or unoccluded fraction otherwise.
+    pub shade: f32,
+    pub normal: Vec3,
+    /// Hit primitive id; `u64::MAX` for a miss.
+    pub prim: u64,
+}
+
+impl Sample {
+    pub const MISS: Sample = Sample { t: f32::INFINITY, shade: 0.0, normal: Vec3::ZERO, prim: u64::MAX };
+
+    pub fn is_hit(&self) -> bool {
+        self.t.is_finite()
+    }
+}
+
+/// A rendered image, stored tile-major.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    samples: Vec<Sample>,
+    /// Rays cast in all: primary plus secondary.
+    pub rays: u64,
+}
+
+impl Frame {
+    fn tiles_x(width: u32) -> u32 {
+        width.div_ceil(TILE)
+    }
+
+    fn index(&self, x: u32, y: u32) -> usize {
+        let tile = (y / TILE) * Self::tiles_x(self.width) + x / TILE;
+        tile as usize * TILE_PIXELS + ((y % TILE) * TILE + x % TILE) as usize
+    }
+
+    pub fn at(&self, x: u32, y: u32) -> &Sample {
+        &self.samples[self.index(x, y)]
+    }
+
+    /// Pixels in row-major order, with their coordinates.
+    pub fn pixels(&self) -> impl Iterator<Item = (u32, u32, &Sample)> + '_ {
+        (0..self.height).flat_map(move |y| (0..self.width).map(move |x| (x, y, self.at(x, y))))
+    }
+
+    pub fn hit_count(&self) -> u64 {
+        self.samples.iter().filter(|s| s.is_hit()).count() as u64
+    }
+
+    pub fn hit_fraction(&self) -> f64 {
+        self.hit_count() as f64 / f64::from(self.width * self.height).max(1.0)
+    }
+}
+
+/// Per-pixel counters of a counting render, in the frame's pixel order (see [`Frame::at`]).
+pub struct CounterImage {
+    counters: Vec<Counters>,
+}
+
+impl CounterImage {
+    pub fn at(&self, frame: &Frame, x: u32, y: u32) -> &Counters {
+        &self.counters[frame.index(x, y)]
+    }
+
+    /// Sum over all pixels.
+    pub fn total(&self) -> Counters {
+        self.counters.iter().fold(Counters::default(), |mut acc, c| {
+            acc += *c;
+            acc
+        })
+    }
+}
+
+/// Renders `workload` through `accel`: the timed path, no counters.
+pub fn render(accel: &dyn Traverse, camera: &Camera, ctx: &ShadeContext, workload: Workload) -> Frame {
+    render_tiles(accel, camera, ctx, workload, None)
+}
+
+/// The same render, also counting traversal work per pixel (primary and secondary rays).
+pub fn render_counted(accel: &dyn Traverse, camera: &Camera, ctx: &ShadeContext, workload: Workload) -> (Frame, CounterImage) {
+    let tiles = (Frame::tiles_x(camera.width) * camera.height.div_ceil(TILE)) as usize;
+    let mut counters = vec![Counters::default(); tiles * TILE_PIXELS];
+    let frame = render_tiles(accel, camera, ctx, workload, Some(&mut counters));
+    (frame, CounterImage { counters })
+}
+
+fn render_tiles(
+    accel: &dyn Traverse,
+    camera: &Camera,
+    ctx: &ShadeContext,
+    workload: Workload,
+    counters: Option<&mut [Counters]>,
+) -> Frame {
+    let (w, h) = (camera.width, camera.height);
+    let tiles_x = Frame::tiles_x(w);
+    let tiles = (tiles_x * h.div_ceil(TILE)) as usize;
+    let mut samples = vec![Sample::MISS; tiles * TILE_PIXELS];
+    let tile_origin = |tile: usize| ((tile as u32 % tiles_x) * TILE, (tile as u32 / tiles_x) * TILE);
+    match counters {
+        None => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
+            let (x0, y0) = tile_origin(tile);
+            for (i, s) in out.iter_mut().enumerate() {
+                let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                if x < w && y < h {
+                    *s = shade_pixel(accel, camera, ctx, workload, x, y, None);
+                }
+            }
+        }),
+        Some(counters) => samples
+            .par_chunks_mut(TILE_PIXELS)
+            .zip(counters.par_chunks_mut(TILE_PIXELS))
+            .enumerate()
+            .for_each(|(tile, (out, cnt))| {
+                let (x0, y0) = tile_origin(tile);
+                for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
+                    let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                    if x < w && y < h {
+                        *s = shade_pixel(accel, camera, ctx, workload, x, y, Some(c));
+                    }
+                }
+            }),
+    }
+    let mut frame = Frame { width: w, height: h, samples, rays: 0 };
+    frame.rays = u64::from(w * h) + frame.hit_count() * workload.secondary_per_hit();
+    frame
+}
+
+#[inline]
+fn cast(accel: &dyn Traverse, ray: &Ray, t_max: f32, counters: &mut Option<&mut Counters>) -> Option<crate::Hit> {
+    match counters {
+        None => accel.intersect(ray, 0.0, t_max),
+        Some(c) => accel.intersect_counted(ray, 0.0, t_max, c),
+    }
+}
+
+#[inline]
+fn occluded(accel: &dyn Traverse, ray: &Ray, t_max: f32, counters: &mut Option<&mut Counters>) -> bool {
+    match counters {
+        None => accel.occluded(ray, 0.0, t_max),
+        Some(c) => accel.intersect_counted(ray, 0.0, t_max, c).is_some(),
+    }
+}
+
+fn shade_pixel(
+    accel: &dyn Traverse,
+    camera: &Camera,
+    ctx: &ShadeContext,
+    workload: Workload,
+    x: u32,
+    y: u32,
+    mut counters: Option<&mut Counters>,
+) -> Sample {
+    let ray = camera.ray(x, y);
+    let Some(hit) = cast(accel, &ray, f32::INFINITY, &mut counters) else {
+        return Sample::MISS;
+    };
+    // Face the normal towards the viewer so secondary rays leave on the visible side.
+    let n = if hit.normal.dot(ray.dir) > 0.0 { -hit.normal } else { hit.normal };
+    let p = ray.at(hit.t) + n * ctx.epsilon;
+    let shade = match workload {
+        Workload::Primary => n.dot(-ray.dir).abs(),
+        Workload::Shadow => {
+            let to_light = ctx.light - p;
+            let lambert = n.dot(to_light.normalize_or_zero()).max(0.0);
+            let blocked = occluded(accel, &Ray::new(p, to_light), 1.0 - 1e-4, &mut counters);
+            if blocked { 0.0 } else { lambert }
+        }
+        Workload::Ao { samples } => {
+            let (t1, t2) = n.any_orthonormal_pair();
+            let pixel = y * camera.width + x;
+            let open = (0..samples)
+                .filter(|&k| {
+                    let (u1, u2) = (unit_hash(ctx.seed, pixel, 2 * k), unit_hash(ctx.seed, pixel, 2 * k + 1));
+                    // Cosine-weighted hemisphere direction (Malley's method).
+                    let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+                    let dir = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+                    !occluded(accel, &Ray::new(p, dir), ctx.ao_radius, &mut counters)
+                })
+                .count();
+            open as f32 / samples.max(1) as f32
+        }
+    };
+    Sample { t: hit.t, shade, normal: hit.normal, prim: hit.prim }
+}
+
+/// A uniform number in [0, 1) from (seed, pixel, index): the PCG output hash, chosen because the
+/// GPU kernels can compute the same numbers in WGSL.
+fn unit_hash(seed: u32, pixel: u32, index: u32) -> f32 {
+    let mut v = seed ^ pixel.wrapping_mul(0x9E37_79B9) ^ index.wrapping_mul(0x85EB_CA6B);
+    v = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((v >> ((v >> 28) + 4)) ^ v).wrapping_mul(277_803_737);
+    let out = (word >> 22) ^ word;
+    (out >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}

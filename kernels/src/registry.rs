@@ -1,0 +1,39 @@
+//! Structures by name: each entry pairs a builder (in `structures`) with its kernels (here).
+//! Adding a structure means one builder, one CPU kernel, one WGSL file and one entry below.
+
+use structures::{BuildError, BuildInput, Structure};
+
+use crate::Traverse;
+
+/// A built structure the harness can measure and traverse.
+pub trait Accel: Structure + Traverse {}
+impl<T: Structure + Traverse> Accel for T {}
+
+pub struct StructureEntry {
+    /// The name on the command line and in results (DESIGN.md §2).
+    pub name: &'static str,
+    /// `triangle` structures index the mesh; `voxel` structures index its voxelisation.
+    pub family: &'static str,
+    pub summary: &'static str,
+    pub build: fn(&BuildInput) -> Result<Box<dyn Accel>, BuildError>,
+}
+
+pub static STRUCTURES: &[StructureEntry] = &[StructureEntry {
+    name: "bvh",
+    family: "triangle",
+    summary: "reference BVH: obvhs PLOC build, flattened to 32-byte nodes, robust ordered traversal",
+    build: build_bvh,
+}];
+
+fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
+    Ok(Box::new(structures::bvh::build(input)?))
+}
+
+pub fn find_structure(name: &str) -> Option<&'static StructureEntry> {
+    STRUCTURES.iter().find(|s| s.name == name)
+}
+
+/// Builds the structure called `name`; `None` if there is no such structure.
+pub fn build_structure(name: &str, input: &BuildInput) -> Option<Result<Box<dyn Accel>, BuildError>> {
+    find_structure(name).map(|entry| (entry.build)(input))
+}

@@ -1,0 +1,169 @@
+//! `report.md`: the run's header and one summary table per scene.
+
+use std::fmt::Write;
+
+use crate::schema::{Agreement, Case, Results};
+
+/// Renders the whole report. Scenes appear in the order their first case ran.
+pub fn report(results: &Results) -> String {
+    let mut out = String::new();
+    header(&mut out, results);
+    let mut scenes: Vec<&str> = Vec::new();
+    for case in &results.cases {
+        if !scenes.contains(&case.scene.as_str()) {
+            scenes.push(&case.scene);
+        }
+    }
+    for scene in scenes {
+        let cases: Vec<&Case> = results.cases.iter().filter(|c| c.scene == scene).collect();
+        scene_section(&mut out, &cases);
+    }
+    out
+}
+
+fn header(out: &mut String, r: &Results) {
+    let m = &r.machine;
+    let s = &r.settings;
+    let _ = writeln!(out, "# accel-bench report\n");
+    let _ = writeln!(out, "- run `{}`, started {}", r.run_id, r.created);
+    let _ = writeln!(out, "- git `{}`{}", r.git.commit, if r.git.dirty { " (uncommitted changes)" } else { "" });
+    let _ = writeln!(
+        out,
+        "- machine: {} — {}, {} logical cores, {:.1} GiB, {} {}",
+        m.hostname,
+        m.cpu,
+        m.cores,
+        m.memory_bytes as f64 / (1u64 << 30) as f64,
+        m.os,
+        m.arch
+    );
+    let _ = writeln!(
+        out,
+        "- settings: preset `{}`, {}×{}, {} threads, {} warm-up + {} timed reps, workloads {}, harness built `{}`",
+        s.preset,
+        s.width,
+        s.height,
+        s.threads,
+        s.warmup,
+        s.reps,
+        s.workloads.join(", "),
+        s.build_profile
+    );
+    let _ = writeln!(out, "- command: `{}`\n", s.command);
+    let _ = writeln!(
+        out,
+        "Times are medians over the timed reps (min–max in brackets). N_c counts nodes or cells, N_p \
+         pointers or triangle references. Steps, visits and tests are per ray, from a separate counting \
+         pass. Agreement compares primary hits with the reference on the same pixels.\n"
+    );
+}
+
+fn scene_section(out: &mut String, cases: &[&Case]) {
+    let first = cases[0];
+    let _ = writeln!(out, "## {}\n", first.scene);
+    let _ = writeln!(
+        out,
+        "{} triangles ({} degenerate), loaded in {:.0} ms. Source: {}\n",
+        first.triangles, first.degenerate_triangles, first.scene_load_ms, first.scene_provenance
+    );
+    let _ = writeln!(
+        out,
+        "| structure | backend | workload | memory MiB | N_c | N_p | build ms | render ms | Mrays/s | steps/ray | visits/ray | tests/ray | hit % | agreement |"
+    );
+    let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
+    for case in cases {
+        let b = &case.build.timing;
+        for r in &case.render {
+            let t = &r.timing;
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
+                case.structure,
+                r.backend,
+                r.workload,
+                case.memory.bytes as f64 / (1u64 << 20) as f64,
+                case.memory.nodes,
+                case.memory.pointers,
+                b.ms_median,
+                b.ms_min,
+                b.ms_max,
+                t.ms_median,
+                t.ms_min,
+                t.ms_max,
+                r.mrays_per_s,
+                r.steps_per_ray_mean,
+                r.node_visits_per_ray_mean,
+                r.prim_tests_per_ray_mean,
+                100.0 * r.hit_fraction,
+                agreement(r.agreement.as_ref())
+            );
+        }
+    }
+    let _ = writeln!(out);
+    let images: Vec<&String> = cases.iter().flat_map(|c| &c.images).collect();
+    if !images.is_empty() {
+        for img in images {
+            let _ = write!(out, "![{img}]({img}) ");
+        }
+        let _ = writeln!(out, "\n");
+    }
+}
+
+fn agreement(a: Option<&Agreement>) -> String {
+    match a {
+        None => "—".into(),
+        Some(a) => format!(
+            "{} on {} px: {} hit/miss, {} triangle mismatches, max rel t err {:.1e}",
+            a.reference, a.pixels, a.hit_mismatches, a.prim_mismatches, a.max_rel_t_error
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::schema::*;
+
+    fn fixture() -> Results {
+        let render = RenderStats {
+            backend: "cpu".into(),
+            workload: "primary".into(),
+            timing: Timing::from_samples(&[4.0, 2.0, 3.0]),
+            mrays_per_s: 12.34,
+            steps_per_ray_mean: 56.7,
+            hit_fraction: 0.25,
+            agreement: Some(Agreement { reference: "brute-force".into(), pixels: 99, ..Agreement::default() }),
+            ..RenderStats::default()
+        };
+        let case = Case {
+            scene: "bunny".into(),
+            triangles: 3674,
+            structure: "bvh".into(),
+            memory: MemoryStats { bytes: 3 << 20, nodes: 777, pointers: 3674, ..MemoryStats::default() },
+            render: vec![render],
+            images: vec!["images/bunny__bvh__cpu.png".into()],
+            ..Case::default()
+        };
+        Results { schema: SCHEMA.into(), run_id: "r1".into(), cases: vec![case], ..Results::default() }
+    }
+
+    #[test]
+    fn tables_carry_the_case_values() {
+        let md = report(&fixture());
+        assert!(md.contains("## bunny"), "{md}");
+        assert!(md.contains("3674 triangles"), "{md}");
+        let row = md.lines().find(|l| l.starts_with("| bvh |")).expect("a bvh row");
+        for want in ["| 3.00 |", "| 777 |", "| 3674 |", "3.00 [2.00–4.00]", "| 12.34 |", "| 56.7 |", "| 25.0 |", "brute-force on 99 px"] {
+            assert!(row.contains(want), "row lacks {want}: {row}");
+        }
+        assert!(md.contains("![images/bunny__bvh__cpu.png](images/bunny__bvh__cpu.png)"));
+    }
+
+    #[test]
+    fn timing_median_of_even_and_odd_counts() {
+        assert_eq!(Timing::from_samples(&[3.0, 1.0, 2.0]).ms_median, 2.0);
+        assert_eq!(Timing::from_samples(&[4.0, 1.0, 2.0, 3.0]).ms_median, 2.5);
+        let t = Timing::from_samples(&[]);
+        assert_eq!((t.ms_median, t.reps), (0.0, 0));
+    }
+}

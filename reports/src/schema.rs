@@ -1,0 +1,156 @@
+//! The `accel-bench/1` result schema (DESIGN.md §8). One [`Results`] per run, one [`Case`] per
+//! (scene, structure); each case holds one [`RenderStats`] per backend and workload.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+pub const SCHEMA: &str = "accel-bench/1";
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Results {
+    pub schema: String,
+    pub run_id: String,
+    /// RFC 3339 UTC time the run started.
+    pub created: String,
+    pub machine: Machine,
+    pub git: Git,
+    pub settings: Settings,
+    pub cases: Vec<Case>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Machine {
+    pub hostname: String,
+    pub os: String,
+    pub arch: String,
+    pub cpu: String,
+    /// Logical cores the OS reports.
+    pub cores: usize,
+    pub memory_bytes: u64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Git {
+    pub commit: String,
+    /// True when the work tree had uncommitted changes.
+    pub dirty: bool,
+}
+
+/// How the run was configured; enough to rerun it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    pub preset: String,
+    pub command: String,
+    pub scenes: Vec<String>,
+    pub structures: Vec<String>,
+    pub backends: Vec<String>,
+    pub workloads: Vec<String>,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    pub warmup: u32,
+    pub reps: u32,
+    /// Cargo profile and optimisation level the harness was compiled with.
+    pub build_profile: String,
+    pub params: BTreeMap<String, String>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Case {
+    pub scene: String,
+    pub scene_provenance: String,
+    pub triangles: u64,
+    pub degenerate_triangles: u64,
+    pub scene_load_ms: f64,
+    pub structure: String,
+    /// The structure's parameters, resolved (defaults included).
+    pub params: serde_json::Value,
+    /// Voxel structures: the grid resolution `2^L`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub resolution: Option<u64>,
+    pub build: BuildStats,
+    pub memory: MemoryStats,
+    pub render: Vec<RenderStats>,
+    /// Images written for this case, relative to the run directory.
+    pub images: Vec<String>,
+}
+
+/// Wall-clock statistics over the timed repetitions, in milliseconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    pub ms_median: f64,
+    pub ms_min: f64,
+    pub ms_max: f64,
+    pub reps: u32,
+}
+
+impl Timing {
+    /// Median, min and max of `samples` (milliseconds). Empty input gives zeros.
+    pub fn from_samples(samples: &[f64]) -> Self {
+        let mut s = samples.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = match n {
+            0 => 0.0,
+            _ if n % 2 == 1 => s[n / 2],
+            _ => 0.5 * (s[n / 2 - 1] + s[n / 2]),
+        };
+        Self { ms_median: median, ms_min: s.first().copied().unwrap_or(0.0), ms_max: s.last().copied().unwrap_or(0.0), reps: n as u32 }
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BuildStats {
+    #[serde(flatten)]
+    pub timing: Timing,
+    /// Most heap bytes held at once during one build, above what was held before it.
+    pub peak_bytes: u64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MemoryStats {
+    pub bytes: u64,
+    pub components: BTreeMap<String, u64>,
+    /// N_c: nodes or cells over all levels.
+    pub nodes: u64,
+    /// N_p: pointers or triangle references.
+    pub pointers: u64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RenderStats {
+    pub backend: String,
+    /// CPU model or GPU adapter name (and driver).
+    pub device: String,
+    pub threads: usize,
+    pub width: u32,
+    pub height: u32,
+    pub workload: String,
+    /// Rays cast per repetition (primary plus secondary).
+    pub rays: u64,
+    #[serde(flatten)]
+    pub timing: Timing,
+    /// Rays per second over the median repetition, in millions.
+    pub mrays_per_s: f64,
+    pub steps_per_ray_mean: f64,
+    pub node_visits_per_ray_mean: f64,
+    pub prim_tests_per_ray_mean: f64,
+    pub hit_fraction: f64,
+    pub agreement: Option<Agreement>,
+}
+
+/// How this render's primary hits compare with a reference's on the same pixels.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Agreement {
+    /// `bvh` (the reference structure's render) or `brute-force` (every triangle tested).
+    pub reference: String,
+    /// Pixels compared (all of them, or a deterministic sample for brute force).
+    pub pixels: u64,
+    /// Pixels where one side hits and the other misses.
+    pub hit_mismatches: u64,
+    /// Pixels where both hit but different primitives at a t differing by more than 1e-6 relative.
+    pub prim_mismatches: u64,
+    /// Largest |t − t_ref| / t_ref over pixels both hit.
+    pub max_rel_t_error: f64,
+}

@@ -1,0 +1,443 @@
+//! The scene-file loaders: good files load with the right geometry, and every kind of bad file
+//! gets its specific error naming the file and the line (OBJ) or element (glTF).
+
+use std::io::Write;
+
+use glam::{Mat4, Quat, Vec3};
+use scenes::load::gltf::parse_gltf;
+use scenes::load::load_bytes;
+use scenes::load::obj::{gunzip, parse_obj};
+use scenes::{Location, Mesh, SceneError};
+use serde_json::{Value, json};
+
+fn obj(text: &str) -> Mesh {
+    parse_obj("good.obj", text.as_bytes()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn obj_err(text: &str) -> SceneError {
+    match parse_obj("bad.obj", text.as_bytes()) {
+        Ok(mesh) => panic!("expected an error, loaded {} triangles", mesh.triangle_count()),
+        Err(e) => e,
+    }
+}
+
+fn location(err: &SceneError) -> Option<&Location> {
+    match err {
+        SceneError::Truncated { location, .. }
+        | SceneError::Malformed { location, .. }
+        | SceneError::NonFinite { location, .. }
+        | SceneError::IndexOutOfRange { location, .. }
+        | SceneError::Unsupported { location, .. } => Some(location),
+        _ => None,
+    }
+}
+
+/// Asserts the error is at OBJ line `line` and its message names the file and the line.
+fn assert_line(err: &SceneError, line: usize) {
+    assert_eq!(location(err), Some(&Location::Line(line)), "{err}");
+    let message = err.to_string();
+    assert!(message.contains("bad.obj") && message.contains(&format!("line {line}")), "{message}");
+}
+
+const SQUARE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+#[test]
+fn quad_is_split_into_two_triangles() {
+    let mesh = obj(&format!("{SQUARE}f 1 2 3 4\n"));
+    assert_eq!(mesh.positions, vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]);
+    assert_eq!(mesh.indices, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!((mesh.name.as_str(), mesh.provenance.as_str()), ("good", "good.obj"));
+    assert_eq!((mesh.normals.clone(), mesh.colors.clone()), (None, None));
+}
+
+#[test]
+fn objects_and_groups_are_merged() {
+    let text = "# test file\no first\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\
+                o second\nv 0 0 2\nv 1 0 2\nv 1 1 2\nv 0 1 2\nf -4 -3 -2 -1\ng third\nf 1 3 7\n";
+    let mesh = parse_obj("dir/multi.obj", text.as_bytes()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((mesh.name.as_str(), mesh.provenance.as_str()), ("multi", "test file"));
+    assert_eq!(mesh.triangle_count(), 4);
+    let z2 = |x, y| Vec3::new(x, y, 2.0);
+    assert_eq!(mesh.triangle(0), [Vec3::ZERO, Vec3::X, Vec3::Y]);
+    assert_eq!(mesh.triangle(1), [z2(0.0, 0.0), z2(1.0, 0.0), z2(1.0, 1.0)]);
+    assert_eq!(mesh.triangle(2), [z2(0.0, 0.0), z2(1.0, 1.0), z2(0.0, 1.0)]);
+    assert_eq!(mesh.triangle(3), [Vec3::ZERO, Vec3::Y, z2(0.0, 1.0)]);
+    mesh.validate("multi.obj").unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn normals_and_colours_are_kept_only_when_per_vertex() {
+    let text = "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn 0 0 1\nvn 0 0 -1\n";
+    let mesh = obj(&format!("{text}f 1//1 2//1 3//1\n"));
+    assert_eq!(mesh.normals, Some(vec![Vec3::Z; 3]));
+    assert_eq!(mesh.colors, Some(vec![Vec3::X, Vec3::Y, Vec3::Z]));
+    // Vertex 1 has two different normals in two faces: there is no per-vertex normal.
+    let mesh = obj(&format!("{text}f 1//1 2//1 3//1\nf 1//2 3//2 2//2\n"));
+    assert_eq!((mesh.triangle_count(), mesh.normals), (2, None));
+}
+
+#[test]
+fn degenerate_triangles_are_kept_and_counted() {
+    let mesh = obj(&format!("{SQUARE}v 2 0 0\nf 1 2 3\nf 1 2 2\nf 1 2 5\n"));
+    assert_eq!((mesh.triangle_count(), mesh.degenerate_count()), (3, 2));
+}
+
+#[test]
+fn line_elements_are_ignored_and_a_final_newline_is_optional() {
+    let mesh = obj(&format!("{SQUARE}l 1 2\nl 1 2 3 4\nf 1 2 3"));
+    assert_eq!(mesh.indices, vec![[0, 1, 2]]);
+}
+
+#[test]
+fn shipped_assets_load_with_their_header_counts() {
+    for (name, triangles, vertices, source) in
+        [("bunny", 3674, 1839, "Stanford Bunny"), ("teapot", 992, 792, "Utah teapot")]
+    {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((scene.triangle_count(), scene.mesh.positions.len()), (triangles, vertices), "{name}");
+        assert!(scene.provenance.starts_with(source), "{}", scene.provenance);
+    }
+}
+
+#[test]
+fn full_dragon_loads_quickly() {
+    let start = std::time::Instant::now();
+    let scene = scenes::load_scene("dragon").unwrap_or_else(|e| panic!("{e}"));
+    let elapsed = start.elapsed();
+    eprintln!("dragon: {} triangles loaded in {elapsed:.2?}", scene.triangle_count());
+    assert_eq!((scene.triangle_count(), scene.mesh.positions.len()), (871_414, 437_645));
+    // The target is < 2 s; the bound is loose because tests share the machine.
+    assert!(elapsed.as_secs_f64() < 8.0, "{elapsed:?}");
+}
+
+#[test]
+fn bad_numbers_are_malformed_at_their_line() {
+    let err = obj_err(&format!("{SQUARE}v 1.0 abc 2.0\nf 1 2 3\n"));
+    assert!(matches!(err, SceneError::Malformed { .. }), "{err}");
+    assert_line(&err, 5);
+    assert!(
+        err.to_string().contains("`v 1.0 abc 2.0`") && err.to_string().contains("`v x y z` with 3 numbers"),
+        "{err}"
+    );
+    let err = obj_err(&format!("v 1 2\n{SQUARE}f 1 2 3\n"));
+    assert!(matches!(err, SceneError::Malformed { .. }), "{err}");
+    assert_line(&err, 1);
+    let err = obj_err(&format!("{SQUARE}vn 0 x 1\nf 1 2 3\n"));
+    assert!(matches!(err, SceneError::Malformed { .. }), "{err}");
+    assert_line(&err, 5);
+    let err = obj_err(&format!("{SQUARE}f 1 2 x\n"));
+    assert!(matches!(err, SceneError::Malformed { .. }), "{err}");
+    assert_line(&err, 5);
+}
+
+#[test]
+fn non_finite_coordinates_are_reported_at_their_line() {
+    for bad in ["v nan 0 0", "v 0 inf 0", "v 0 0 -inf", "v 1e39 0 0", "v NaN 1 2"] {
+        let err = obj_err(&format!("{SQUARE}{bad}\nv 2 2 2\nf 1 5 6\n"));
+        assert!(matches!(err, SceneError::NonFinite { .. }), "{bad}: {err}");
+        assert_line(&err, 5);
+        assert!(err.to_string().contains(bad), "{err}");
+    }
+}
+
+#[test]
+fn out_of_range_face_indices_name_index_and_vertex_count() {
+    let cases = [("f 1 2 7", 7, 4), ("f 0 1 2", 0, 4), ("f 1 2 -5", -5, 4), ("f 1 2 3 4 5", 5, 4)];
+    for (face, index, count) in cases {
+        let err = obj_err(&format!("{SQUARE}f 1 2 3\n{face}\n"));
+        match &err {
+            SceneError::IndexOutOfRange { index: i, vertex_count, .. } => {
+                assert_eq!((*i, *vertex_count), (index, count), "{face}")
+            }
+            _ => panic!("{face}: {err}"),
+        }
+        assert_line(&err, 6);
+    }
+}
+
+#[test]
+fn faces_with_fewer_than_three_vertices_are_malformed() {
+    for face in ["f 1 2", "f 3", "f"] {
+        let err = obj_err(&format!("{SQUARE}f 1 2 3\n{face}\nf 2 3 4\n"));
+        assert!(matches!(err, SceneError::Malformed { .. }), "{face}: {err}");
+        assert_line(&err, 6);
+    }
+}
+
+#[test]
+fn a_cut_off_last_record_is_truncated_but_with_a_newline_malformed() {
+    for last in ["f 1 2", "f 1 2/", "v 1.0 2.", "vn 0.5", "v"] {
+        let err = obj_err(&format!("{SQUARE}f 1 2 3\n{last}"));
+        assert!(matches!(err, SceneError::Truncated { .. }), "{last}: {err}");
+        assert_line(&err, 6);
+        let err = obj_err(&format!("{SQUARE}f 1 2 3\n{last}\n"));
+        assert!(matches!(err, SceneError::Malformed { .. }), "{last}: {err}");
+        assert_line(&err, 6);
+    }
+}
+
+#[test]
+fn empty_and_vertex_only_files_are_empty() {
+    for text in ["", "\n\n", "# nothing\n", SQUARE, "v 0 0 0\nv 1 0 0\nl 1 2\n"] {
+        let err = obj_err(text);
+        assert!(matches!(err, SceneError::Empty { .. }), "{text:?}: {err}");
+        assert!(err.to_string().contains("bad.obj"), "{err}");
+    }
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    encoder.write_all(bytes).and_then(|()| encoder.finish()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn gzipped_obj_round_trips_and_cut_streams_are_truncated() {
+    let text: String = (0..2000).map(|i| format!("v {i} {} 0.5\n", i * 7 % 13)).collect::<String>() + "f 1 2 3\n";
+    let packed = gzip(text.as_bytes());
+    assert_eq!(gunzip("t.obj.gz", &packed).unwrap_or_else(|e| panic!("{e}")), text.as_bytes());
+    let scene = load_bytes("t.obj.gz", &packed).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.triangle_count(), 1);
+
+    let err = load_bytes("dir/t.obj.gz", &packed[..packed.len() / 2]).map(|_| ()).expect_err("cut stream");
+    let SceneError::Truncated { location: Location::Line(line), detail, .. } = &err else { panic!("{err}") };
+    let decoded: usize =
+        detail.trim_start_matches("gzip stream ends early after ").trim_end_matches(" bytes").parse().unwrap_or(0);
+    assert!(decoded > 0 && decoded < text.len(), "{err}");
+    assert_eq!(*line, text.as_bytes()[..decoded].iter().filter(|&&b| b == b'\n').count() + 1);
+    assert!(err.to_string().contains("dir/t.obj.gz") && err.to_string().contains(&format!("line {line}")), "{err}");
+    // Cut inside the 8-byte trailer: all text decoded, the stream still ends early.
+    assert!(matches!(gunzip("t.obj.gz", &packed[..packed.len() - 3]), Err(SceneError::Truncated { .. })));
+}
+
+#[test]
+fn plain_text_named_obj_gz_is_malformed() {
+    let err = load_bytes("plain.obj.gz", format!("{SQUARE}f 1 2 3\n").as_bytes()).map(|_| ()).expect_err("not gzip");
+    assert!(matches!(err, SceneError::Malformed { location: Location::File, .. }), "{err}");
+    assert!(err.to_string().contains("plain.obj.gz") && err.to_string().contains("gzip"), "{err}");
+}
+
+// ---- glTF ---------------------------------------------------------------------------------
+
+const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+/// A glTF document with one mesh (one primitive over `positions` and u16 `indices`) referenced
+/// by node 0 (translated) and by node 2, the child of node 1 (scaled and rotated), and its buffer.
+fn document(positions: &[[f32; 3]], indices: &[u16]) -> (Value, Vec<u8>) {
+    let mut bin: Vec<u8> = positions.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let index_offset = bin.len();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = json!({
+        "asset": {"version": "2.0", "generator": "loaders.rs"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [
+            {"mesh": 0, "translation": [10.0, 0.0, 0.0]},
+            {"children": [2], "scale": [2.0, 2.0, 2.0], "rotation": [0.0, 0.0, 0.5f32.sqrt(), 0.5f32.sqrt()]},
+            {"mesh": 0, "name": "child", "translation": [0.0, 0.0, 5.0]}
+        ],
+        "meshes": [{"name": "tri", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": index_offset},
+            {"buffer": 0, "byteOffset": index_offset, "byteLength": bin.len() - index_offset}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": positions.len(), "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5123, "count": indices.len(), "type": "SCALAR"}
+        ]
+    });
+    (json, bin)
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    bytes
+        .chunks(3)
+        .flat_map(|c| {
+            let n = c.iter().enumerate().fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
+            (0..4).map(move |k| if k <= c.len() { ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' })
+        })
+        .collect()
+}
+
+/// A `.gltf` text with the buffer embedded as a data URI.
+fn gltf_text(mut json: Value, bin: &[u8]) -> Vec<u8> {
+    json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", base64(bin)));
+    serde_json::to_vec_pretty(&json).unwrap_or_default()
+}
+
+/// A `.glb`: 12-byte header, JSON chunk (space-padded), BIN chunk (zero-padded).
+fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let pad = |mut v: Vec<u8>, fill: u8| {
+        v.resize(v.len().next_multiple_of(4), fill);
+        v
+    };
+    let (json, bin) = (pad(serde_json::to_vec(json).unwrap_or_default(), b' '), pad(bin.to_vec(), 0));
+    let mut out = b"glTF".to_vec();
+    for word in [2, 12 + 8 + json.len() + 8 + bin.len(), json.len()] {
+        out.extend((word as u32).to_le_bytes());
+    }
+    out.extend(b"JSON".iter().chain(&json).chain(&(bin.len() as u32).to_le_bytes()).chain(b"BIN\0").chain(&bin));
+    out
+}
+
+fn gltf_err(bytes: &[u8]) -> SceneError {
+    parse_gltf("bad.gltf", bytes, None).map(|_| ()).expect_err("expected an error")
+}
+
+fn element(err: &SceneError) -> String {
+    match location(err) {
+        Some(Location::Element(e)) => e.clone(),
+        _ => panic!("not an element location: {err}"),
+    }
+}
+
+#[test]
+fn gltf_nodes_apply_their_transforms() {
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let parent =
+        Mat4::from_scale_rotation_translation(Vec3::splat(2.0), Quat::from_rotation_z(90f32.to_radians()), Vec3::ZERO);
+    let child = parent * Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0));
+    let mut expected: Vec<Vec3> = TRIANGLE.iter().map(|&p| Vec3::from(p) + Vec3::new(10.0, 0.0, 0.0)).collect();
+    expected.extend(TRIANGLE.iter().map(|&p| child.transform_point3(Vec3::from(p))));
+    assert!(expected[4].abs_diff_eq(Vec3::new(0.0, 2.0, 10.0), 1e-5), "hand-checked corner");
+    for (name, bytes) in [("t.gltf", gltf_text(json.clone(), &bin)), ("t.glb", glb(&json, &bin))] {
+        let mesh = parse_gltf(name, &bytes, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.indices, vec![[0, 1, 2], [3, 4, 5]], "{name}");
+        assert_eq!(mesh.positions.len(), 6);
+        for (got, want) in mesh.positions.iter().zip(&expected) {
+            assert!(got.abs_diff_eq(*want, 1e-5), "{name}: {got} != {want}");
+        }
+        assert_eq!(load_bytes(name, &bytes).map(|s| s.triangle_count()).unwrap_or(0), 2);
+    }
+}
+
+#[test]
+fn gltf_strips_fans_and_unindexed_primitives() {
+    let square = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let (mut json, bin) = document(&square, &[0, 1, 2, 3]);
+    json["scenes"][0]["nodes"] = json!([0]);
+    for (mode, want) in [(5, vec![[0, 1, 2], [1, 3, 2]]), (6, vec![[1, 2, 0], [2, 3, 0]])] {
+        json["meshes"][0]["primitives"][0]["mode"] = json!(mode);
+        let mesh = parse_gltf("t.gltf", &gltf_text(json.clone(), &bin), None).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(mesh.indices, want, "mode {mode}");
+    }
+    let (mut json, bin) = document(&TRIANGLE, &[]);
+    json["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": 0}});
+    json["accessors"] = json!([json["accessors"][0]]);
+    json["bufferViews"] = json!([json["bufferViews"][0]]);
+    let mesh = parse_gltf("t.gltf", &gltf_text(json, &bin), None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(mesh.indices, vec![[0, 1, 2], [3, 4, 5]]);
+}
+
+#[test]
+fn gltf_external_buffer_is_read_from_the_base_directory() {
+    let dir = std::env::temp_dir().join(format!("accel-bench-loaders-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json["buffers"][0]["uri"] = json!("tri%20data.bin");
+    std::fs::write(dir.join("tri data.bin"), &bin).unwrap_or_else(|e| panic!("{e}"));
+    let path = dir.join("ext.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap_or_default()).unwrap_or_else(|e| panic!("{e}"));
+    let scene = scenes::load::load_file(&path);
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(scene.map(|s| (s.triangle_count(), s.name)).unwrap_or_else(|e| panic!("{e}")), (2, "ext".into()));
+}
+
+#[test]
+fn gltf_non_finite_positions_name_the_vertex() {
+    let (json, bin) = document(&[[0.0; 3], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]], &[0, 1, 2]);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(err, SceneError::NonFinite { .. }), "{err}");
+    assert_eq!(element(&err), "mesh \"tri\" primitive 0 POSITION[1]");
+    assert!(err.to_string().starts_with("bad.gltf: mesh \"tri\" primitive 0 POSITION[1]"), "{err}");
+}
+
+#[test]
+fn gltf_out_of_range_indices_name_index_and_vertex_count() {
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 5]);
+    let err = gltf_err(&glb(&json, &bin));
+    assert!(matches!(err, SceneError::IndexOutOfRange { index: 5, vertex_count: 3, .. }), "{err}");
+    assert_eq!(element(&err), "mesh \"tri\" primitive 0 indices[2]");
+}
+
+#[test]
+fn gltf_short_buffers_and_cut_glbs_are_truncated() {
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let err = gltf_err(&gltf_text(json.clone(), &bin[..bin.len() - 8]));
+    assert!(matches!(err, SceneError::Truncated { .. }), "{err}");
+    assert_eq!(element(&err), "buffer 0");
+    let whole = glb(&json, &bin);
+    let err = gltf_err(&whole[..whole.len() - 10]);
+    assert!(matches!(err, SceneError::Truncated { .. }) && element(&err) == "GLB header", "{err}");
+    // Cut, with the header's total length patched to match: the BIN chunk header still says more.
+    let mut cut = whole[..whole.len() - 8].to_vec();
+    let length = (cut.len() as u32).to_le_bytes();
+    cut[8..12].copy_from_slice(&length);
+    let err = gltf_err(&cut);
+    assert!(matches!(err, SceneError::Truncated { .. }) && element(&err) == "GLB Bin chunk", "{err}");
+    // A JSON text that ends early.
+    let text = gltf_text(json.take(), &bin);
+    let err = gltf_err(&text[..text.len() / 2]);
+    assert!(matches!(err, SceneError::Truncated { .. }) && element(&err).starts_with("JSON line"), "{err}");
+}
+
+#[test]
+fn gltf_invalid_json_is_malformed_with_line_and_column() {
+    let err = gltf_err(b"{\n  \"asset\": {\"version\": \"2.0\"},\n  \"nodes\": [ }\n}");
+    assert!(matches!(err, SceneError::Malformed { .. }), "{err}");
+    assert_eq!(element(&err), "JSON line 3 column 14");
+}
+
+#[test]
+fn gltf_without_triangles_is_empty() {
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json["meshes"][0]["primitives"][0]["mode"] = json!(1);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(err, SceneError::Empty { .. }), "{err}");
+    assert!(err.to_string().contains("mesh \"tri\" primitive 0 (Lines)"), "{err}");
+}
+
+/// Inputs the `gltf` crate would panic on, or read out of range, if passed through unchecked.
+#[test]
+fn gltf_inputs_that_could_panic_are_malformed() {
+    type Edit = fn(&mut Value);
+    let edits: [(&str, Edit, &str); 6] = [
+        (
+            "missing accessor",
+            |j| j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9),
+            "attributes[\"POSITION\"]",
+        ),
+        ("missing POSITION", |j| j["meshes"][0]["primitives"][0]["attributes"] = json!({}), "attributes[\"POSITION\"]"),
+        ("short stride", |j| j["bufferViews"][0]["byteStride"] = json!(4), "POSITION (accessor 0)"),
+        ("float indices", |j| j["accessors"][1]["componentType"] = json!(5126), "indices (accessor 1)"),
+        ("past the view", |j| j["accessors"][0]["count"] = json!(4), "POSITION (accessor 0)"),
+        ("node cycle", |j| j["nodes"][2]["children"] = json!([1]), "node 1"),
+    ];
+    for (what, edit, at) in edits {
+        let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+        edit(&mut json);
+        let err = gltf_err(&gltf_text(json, &bin));
+        assert!(matches!(err, SceneError::Malformed { .. }), "{what}: {err}");
+        assert!(element(&err).contains(at), "{what}: {err}");
+    }
+}
+
+#[test]
+fn cut_or_corrupted_files_never_panic() {
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let whole = glb(&json, &bin);
+    for len in 0..whole.len() {
+        assert!(parse_gltf("cut.glb", &whole[..len], None).is_err(), "cut at {len}");
+    }
+    for i in 0..whole.len() {
+        let mut bad = whole.clone();
+        bad[i] ^= 0xA5;
+        let _ = parse_gltf("flipped.glb", &bad, None);
+    }
+    let text = format!("{SQUARE}vn 0 0 1\nf 1//1 2//1 3//1 4//1\n");
+    for len in 0..text.len() {
+        let _ = parse_obj("cut.obj", &text.as_bytes()[..len]);
+    }
+}

@@ -1,0 +1,29 @@
+//! Memory accounting shared by every structure (DESIGN.md §3, §8: `memory.components`, N_c, N_p).
+
+use serde::Serialize;
+
+/// Bytes by named component, plus node and pointer counts in each paper's own definition.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct MemoryReport {
+    /// `(component, bytes)` in a stable order, e.g. `("nodes", 1234)`.
+    pub components: Vec<(String, u64)>,
+    /// N_c: nodes (BVH, octrees) or cells over all levels (grids).
+    pub nodes: u64,
+    /// N_p: pointers (octrees) or triangle references (grids, BVH leaves).
+    pub pointers: u64,
+}
+
+impl MemoryReport {
+    pub fn new(nodes: u64, pointers: u64) -> Self {
+        Self { components: Vec::new(), nodes, pointers }
+    }
+
+    pub fn with(mut self, component: &str, bytes: u64) -> Self {
+        self.components.push((component.to_string(), bytes));
+        self
+    }
+
+    pub fn total_bytes(&self) -> u64 {
+        self.components.iter().map(|(_, b)| b).sum()
+    }
+}
