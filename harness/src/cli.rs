@@ -25,7 +25,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Build and time every (scene, structure, backend) of the matrix; write results and a report.
-    Run(RunArgs),
+    Run(Box<RunArgs>),
     /// List scenes, structures, backends or presets.
     List {
         #[arg(value_enum, default_value_t = ListWhat::All)]
@@ -154,7 +154,9 @@ impl Preset {
     fn scenes(self) -> Vec<String> {
         let list: Vec<&str> = match self {
             Preset::Quick => QUICK_SCENES.to_vec(),
-            Preset::Ci => scenes::BUILTIN_SCENES.iter().copied().filter(|s| !matches!(*s, "dragon" | "dragon-203k")).collect(),
+            Preset::Ci => {
+                scenes::BUILTIN_SCENES.iter().copied().filter(|s| !matches!(*s, "dragon" | "dragon-203k")).collect()
+            }
             Preset::Default => scenes::BUILTIN_SCENES.to_vec(),
         };
         list.into_iter().map(String::from).collect()

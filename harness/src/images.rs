@@ -8,7 +8,8 @@ use reports::images::{heat_rgb, shaded_rgb, write_png};
 
 /// Writes `<stem>.png` and `<stem>__steps.png`; returns their paths relative to the run directory.
 pub fn write_case_images(dir: &Path, stem: &str, frame: &Frame, steps: &[f32]) -> Result<Vec<String>> {
-    let shaded: Vec<u8> = frame.pixels().flat_map(|(_, _, s)| shaded_rgb(s.is_hit(), s.shade, s.normal.to_array())).collect();
+    let shaded: Vec<u8> =
+        frame.pixels().flat_map(|(_, _, s)| shaded_rgb(s.is_hit(), s.shade, s.normal.to_array())).collect();
     // Scale the heat map to the 99th percentile so a few outliers do not wash out the rest.
     let mut sorted = steps.to_vec();
     sorted.sort_by(f32::total_cmp);

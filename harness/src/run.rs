@@ -199,7 +199,12 @@ fn measure_case(
     let shade = ShadeContext::for_scene(scene, args.seed);
     for &backend in &plan.backends {
         for &workload in &plan.workloads {
-            bar.set_message(format!("{}/{structure}: rendering {} on {}", scene.name, workload.name(), backend_name(backend)));
+            bar.set_message(format!(
+                "{}/{structure}: rendering {} on {}",
+                scene.name,
+                workload.name(),
+                backend_name(backend)
+            ));
             let (stats, frame, heat) = timed_renders(accel.as_ref(), &camera, &shade, workload, plan);
             let mut stats = stats;
             if workload == Workload::Primary {
@@ -311,7 +316,12 @@ fn one_line(case: &Case) -> String {
     let renders: Vec<String> = case
         .render
         .iter()
-        .map(|r| format!("{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray", r.backend, r.workload, r.timing.ms_median, r.mrays_per_s, r.steps_per_ray_mean))
+        .map(|r| {
+            format!(
+                "{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray",
+                r.backend, r.workload, r.timing.ms_median, r.mrays_per_s, r.steps_per_ray_mean
+            )
+        })
         .collect();
     format!(
         "  {:<12} {:<6} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",

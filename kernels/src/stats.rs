@@ -3,7 +3,6 @@
 
 use std::ops::AddAssign;
 
-
 /// Hooks a kernel calls as it traverses; every method is a no-op for [`NoStats`].
 pub trait Stats {
     /// One iteration of the traversal loop.

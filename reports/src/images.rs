@@ -20,7 +20,8 @@ pub fn shaded_rgb(hit: bool, shade: f32, normal: [f32; 3]) -> [u8; 3] {
 
 /// A heat-map colour for `value` on a scale up to `max`: black → blue → red → yellow → white.
 pub fn heat_rgb(value: f64, max: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 5] = [[0.0, 0.0, 0.0], [0.1, 0.1, 0.8], [0.85, 0.1, 0.1], [1.0, 0.85, 0.0], [1.0, 1.0, 1.0]];
+    const STOPS: [[f64; 3]; 5] =
+        [[0.0, 0.0, 0.0], [0.1, 0.1, 0.8], [0.85, 0.1, 0.1], [1.0, 0.85, 0.0], [1.0, 1.0, 1.0]];
     let x = if max > 0.0 { (value / max).clamp(0.0, 1.0) } else { 0.0 } * (STOPS.len() - 1) as f64;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let f = x - i as f64;

@@ -153,7 +153,16 @@ mod tests {
         assert!(md.contains("## bunny"), "{md}");
         assert!(md.contains("3674 triangles"), "{md}");
         let row = md.lines().find(|l| l.starts_with("| bvh |")).expect("a bvh row");
-        for want in ["| 3.00 |", "| 777 |", "| 3674 |", "3.00 [2.00–4.00]", "| 12.34 |", "| 56.7 |", "| 25.0 |", "brute-force on 99 px"] {
+        for want in [
+            "| 3.00 |",
+            "| 777 |",
+            "| 3674 |",
+            "3.00 [2.00–4.00]",
+            "| 12.34 |",
+            "| 56.7 |",
+            "| 25.0 |",
+            "brute-force on 99 px",
+        ] {
             assert!(row.contains(want), "row lacks {want}: {row}");
         }
         assert!(md.contains("![images/bunny__bvh__cpu.png](images/bunny__bvh__cpu.png)"));

@@ -96,7 +96,12 @@ impl Timing {
             _ if n % 2 == 1 => s[n / 2],
             _ => 0.5 * (s[n / 2 - 1] + s[n / 2]),
         };
-        Self { ms_median: median, ms_min: s.first().copied().unwrap_or(0.0), ms_max: s.last().copied().unwrap_or(0.0), reps: n as u32 }
+        Self {
+            ms_median: median,
+            ms_min: s.first().copied().unwrap_or(0.0),
+            ms_max: s.last().copied().unwrap_or(0.0),
+            reps: n as u32,
+        }
     }
 }
 

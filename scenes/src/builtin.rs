@@ -118,7 +118,7 @@ mod tests {
 
     #[test]
     fn unknown_names_are_rejected_with_the_list() {
-        let err = load_scene("dragon-12k").unwrap_err().to_string();
+        let err = load_scene("dragon-12k").expect_err("no such scene").to_string();
         assert!(err.contains("unknown scene 'dragon-12k'") && err.contains("bunny"), "{err}");
     }
 }

@@ -93,7 +93,10 @@ impl Mesh {
     /// location is the element index (loaders with line numbers check earlier, in their own terms).
     pub fn validate(&self, path: &str) -> Result<(), SceneError> {
         if self.indices.is_empty() {
-            return Err(SceneError::Empty { path: path.into(), detail: format!("mesh '{}' has no triangles", self.name) });
+            return Err(SceneError::Empty {
+                path: path.into(),
+                detail: format!("mesh '{}' has no triangles", self.name),
+            });
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(SceneError::NonFinite {
@@ -113,7 +116,9 @@ impl Mesh {
                 });
             }
         }
-        for (what, len) in [("normals", self.normals.as_ref().map(Vec::len)), ("colors", self.colors.as_ref().map(Vec::len))] {
+        for (what, len) in
+            [("normals", self.normals.as_ref().map(Vec::len)), ("colors", self.colors.as_ref().map(Vec::len))]
+        {
             if let Some(len) = len.filter(|&len| len != n) {
                 return Err(SceneError::Malformed {
                     path: path.into(),

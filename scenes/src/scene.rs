@@ -46,7 +46,14 @@ impl Scene {
             triangle_count: mesh.indices.len() as u32,
             closed: false,
         };
-        Self { name: name.into(), provenance: mesh.provenance.clone(), mesh, objects: vec![object], camera: None, light: None }
+        Self {
+            name: name.into(),
+            provenance: mesh.provenance.clone(),
+            mesh,
+            objects: vec![object],
+            camera: None,
+            light: None,
+        }
     }
 
     pub fn triangle_count(&self) -> usize {

@@ -16,10 +16,9 @@ impl Params {
     pub fn parse<'a>(items: impl IntoIterator<Item = &'a str>) -> Result<Self, BuildError> {
         let mut values = BTreeMap::new();
         for item in items {
-            let (k, v) = item.split_once('=').ok_or_else(|| BuildError::BadParam {
-                key: item.to_string(),
-                detail: "expected key=value".into(),
-            })?;
+            let (k, v) = item
+                .split_once('=')
+                .ok_or_else(|| BuildError::BadParam { key: item.to_string(), detail: "expected key=value".into() })?;
             values.insert(k.trim().to_string(), v.trim().to_string());
         }
         Ok(Self { values })
@@ -61,7 +60,7 @@ mod tests {
     fn rejects_items_without_equals_and_bad_numbers() {
         assert!(Params::parse(["lambda"]).is_err());
         let p = Params::parse(["lambda=abc"]).expect("parses as text");
-        let err = p.get("lambda", 1.0f32).unwrap_err().to_string();
+        let err = p.get("lambda", 1.0f32).expect_err("abc is not a number").to_string();
         assert!(err.contains("lambda") && err.contains("abc"), "{err}");
     }
 }

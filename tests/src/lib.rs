@@ -100,7 +100,7 @@ pub fn compare_with_brute_force(accel: &dyn Traverse, triangles: &[Triangle], ra
                 None => set.is_empty(),
                 Some((gt, prim)) => (gt == t && set.contains(&prim)) || (gt - t).abs() <= TIE_REL_T * t.abs(),
             };
-            (!ok).then(|| Mismatch { ray: *r, got, expected_t: t, expected_prims: set })
+            (!ok).then_some(Mismatch { ray: *r, got, expected_t: t, expected_prims: set })
         })
         .collect()
 }

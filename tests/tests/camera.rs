@@ -45,7 +45,12 @@ fn corner_rays_span_the_field_of_view() {
         let local = Vec3::new(d.dot(right), d.dot(up), d.dot(forward));
         // Projected onto the image plane at unit distance.
         let (pu, pv) = (local.x / local.z, local.y / local.z);
-        assert!((pu - su * u).abs() < 1e-5 && (pv - sv * v).abs() < 1e-5, "pixel ({x},{y}): ({pu}, {pv}) vs ({}, {})", su * u, sv * v);
+        assert!(
+            (pu - su * u).abs() < 1e-5 && (pv - sv * v).abs() < 1e-5,
+            "pixel ({x},{y}): ({pu}, {pv}) vs ({}, {})",
+            su * u,
+            sv * v
+        );
     }
     // Vertical field of view: top and bottom edges of the image (not pixel centres) at ±22.5°.
     let top_edge = (h as f32 / 2.0) / h as f32 * 2.0 * half;

@@ -104,8 +104,9 @@ fn rays_at_shared_edges_and_vertices_never_pass_through() {
         let scene = Scene::from_mesh(closed.name.clone(), closed.mesh.clone());
         let triangles: Arc<[Triangle]> = scene.triangles();
         let params = Params::default();
-        let bvh = structures::bvh::build(&BuildInput { scene: &scene, triangles: Arc::clone(&triangles), params: &params })
-            .expect("bvh builds");
+        let bvh =
+            structures::bvh::build(&BuildInput { scene: &scene, triangles: Arc::clone(&triangles), params: &params })
+                .expect("bvh builds");
         let far = 2.0 * scene.bounds().diagonal();
         for target in targets(&closed.mesh, &mut rng) {
             let mut dirs = axes.to_vec();
@@ -148,8 +149,18 @@ fn exact_edge_and_vertex_rays_hit_a_cube() {
     }
     // Two triangles per face, outward winding.
     mesh.indices = vec![
-        [0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-        [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5],
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
     ];
     let triangles: Vec<Triangle> = (0..mesh.triangle_count()).map(|i| mesh.triangle(i)).collect();
     let mut checked = 0;

@@ -145,7 +145,12 @@ pub fn render(accel: &dyn Traverse, camera: &Camera, ctx: &ShadeContext, workloa
 }
 
 /// The same render, also counting traversal work per pixel (primary and secondary rays).
-pub fn render_counted(accel: &dyn Traverse, camera: &Camera, ctx: &ShadeContext, workload: Workload) -> (Frame, CounterImage) {
+pub fn render_counted(
+    accel: &dyn Traverse,
+    camera: &Camera,
+    ctx: &ShadeContext,
+    workload: Workload,
+) -> (Frame, CounterImage) {
     let tiles = (Frame::tiles_x(camera.width) * camera.height.div_ceil(TILE)) as usize;
     let mut counters = vec![Counters::default(); tiles * TILE_PIXELS];
     let frame = render_tiles(accel, camera, ctx, workload, Some(&mut counters));
@@ -174,19 +179,19 @@ fn render_tiles(
                 }
             }
         }),
-        Some(counters) => samples
-            .par_chunks_mut(TILE_PIXELS)
-            .zip(counters.par_chunks_mut(TILE_PIXELS))
-            .enumerate()
-            .for_each(|(tile, (out, cnt))| {
-                let (x0, y0) = tile_origin(tile);
-                for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
-                    let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
-                    if x < w && y < h {
-                        *s = shade_pixel(accel, camera, ctx, workload, x, y, Some(c));
+        Some(counters) => {
+            samples.par_chunks_mut(TILE_PIXELS).zip(counters.par_chunks_mut(TILE_PIXELS)).enumerate().for_each(
+                |(tile, (out, cnt))| {
+                    let (x0, y0) = tile_origin(tile);
+                    for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
+                        let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                        if x < w && y < h {
+                            *s = shade_pixel(accel, camera, ctx, workload, x, y, Some(c));
+                        }
                     }
-                }
-            }),
+                },
+            )
+        }
     }
     let mut frame = Frame { width: w, height: h, samples, rays: 0 };
     frame.rays = u64::from(w * h) + frame.hit_count() * workload.secondary_per_hit();

@@ -28,7 +28,13 @@ impl ShearedRay {
         let d = ray.dir;
         let a = d.abs();
         // The axis where the direction is largest, so the shear divides by the biggest value.
-        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let kz = if a.x > a.y {
+            if a.x > a.z { 0 } else { 2 }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Keep the winding of the projected triangle independent of the sign of d[kz].

@@ -33,30 +33,18 @@ pub(super) fn generate(seed: u64) -> Scene {
                 if !rng.random_bool(BUILT) {
                     continue;
                 }
-                let footprint = Vec3::new(
-                    rng.random_range(0.45..0.9),
-                    1.0,
-                    rng.random_range(0.45..0.9),
-                );
+                let footprint = Vec3::new(rng.random_range(0.45..0.9), 1.0, rng.random_range(0.45..0.9));
                 let slack = Vec3::ONE - footprint;
                 let corner = Vec3::new(pitch(lx) - half, 0.0, pitch(lz) - half);
                 let centre = corner
-                    + Vec3::new(
-                        rng.random::<f32>() * slack.x,
-                        0.0,
-                        rng.random::<f32>() * slack.z,
-                    )
+                    + Vec3::new(rng.random::<f32>() * slack.x, 0.0, rng.random::<f32>() * slack.z)
                     + footprint * 0.5;
                 // Heights: mostly low, a long tail of towers, taller towards the centre.
-                let downtown =
-                    (-(centre.x * centre.x + centre.z * centre.z) / (0.12 * width * width)).exp();
+                let downtown = (-(centre.x * centre.x + centre.z * centre.z) / (0.12 * width * width)).exp();
                 let height = (0.4 + 3.0 * rng.random::<f32>().powi(3)) * (1.0 + 5.0 * downtown);
                 let size = Vec3::new(footprint.x, height, footprint.z);
-                let transform = Mat4::from_scale_rotation_translation(
-                    size,
-                    glam::Quat::IDENTITY,
-                    centre.with_y(0.5 * height),
-                );
+                let transform =
+                    Mat4::from_scale_rotation_translation(size, glam::Quat::IDENTITY, centre.with_y(0.5 * height));
                 push_box(mesh, transform, false);
                 buildings += 1;
             }
@@ -66,8 +54,7 @@ pub(super) fn generate(seed: u64) -> Scene {
         let margin = half + 2.0;
         let corners = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)];
         let first = mesh.positions.len() as u32;
-        mesh.positions
-            .extend(corners.map(|(x, z)| Vec3::new(x * margin, 0.0, z * margin)));
+        mesh.positions.extend(corners.map(|(x, z)| Vec3::new(x * margin, 0.0, z * margin)));
         // Counter-clockwise seen from above (−x−z, −x+z, +x+z, +x−z): the normal points up.
         push_quad(mesh, [first, first + 1, first + 2, first + 3]);
     });

@@ -24,11 +24,7 @@ pub(super) fn generate(seed: u64) -> Scene {
     builder.object("flat", false, |mesh| {
         let (log_min, log_max) = (MIN_SIZE.ln(), MAX_SIZE.ln());
         for _ in 0..TRIANGLES {
-            let centre = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                0.0,
-                rng.random_range(-1.0..1.0),
-            );
+            let centre = Vec3::new(rng.random_range(-1.0..1.0), 0.0, rng.random_range(-1.0..1.0));
             let size = rng.random_range(log_min..log_max).exp();
             // Three corners at increasing angles around the centre, every gap under π so the
             // centre lies inside and the winding follows the angles: gaps 2π/3 ± jitter.

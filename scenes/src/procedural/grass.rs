@@ -27,11 +27,7 @@ const WIDTH_RATIO: std::ops::Range<f32> = 0.01..0.05;
 
 /// `grass-10k` for 10 000, `grass-2500` for 2500.
 pub(super) fn scene_name(n: usize) -> String {
-    if n.is_multiple_of(1000) && n > 0 {
-        format!("grass-{}k", n / 1000)
-    } else {
-        format!("grass-{n}")
-    }
+    if n.is_multiple_of(1000) && n > 0 { format!("grass-{}k", n / 1000) } else { format!("grass-{n}") }
 }
 
 pub(super) fn generate(n: usize, seed: u64) -> Scene {

@@ -35,13 +35,7 @@ fn distance_estimate(c: DVec3) -> f64 {
         if r > 0.0 {
             let theta = (z.z / r).clamp(-1.0, 1.0).acos() * f64::from(POWER);
             let phi = z.y.atan2(z.x) * f64::from(POWER);
-            z = r.powi(POWER)
-                * DVec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                )
-                + c;
+            z = r.powi(POWER) * DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()) + c;
         } else {
             z = c;
         }
@@ -76,10 +70,7 @@ struct Grid {
 impl Grid {
     fn new(resolution: u32) -> Self {
         let n = resolution.max(2) as usize;
-        Self {
-            n,
-            cell: 2.0 * HALF_EXTENT / (n - 1) as f64,
-        }
+        Self { n, cell: 2.0 * HALF_EXTENT / (n - 1) as f64 }
     }
 
     fn cells(&self) -> usize {
@@ -97,26 +88,19 @@ fn sample_field(grid: &Grid) -> Vec<f32> {
     let (n, iso) = (grid.n, 0.5 * grid.cell);
     let point = |i: usize| -HALF_EXTENT + i as f64 * grid.cell;
     let mut field = vec![0.0f32; n * n * n];
-    field
-        .par_chunks_mut(n * n)
-        .enumerate()
-        .for_each(|(z, slab)| {
-            for (i, value) in slab.iter_mut().enumerate() {
-                // World y is the bulb's polar axis (its z), so the canonical camera sees it upright.
-                let (x, y) = (point(i % n), point(i / n));
-                *value = (distance_estimate(DVec3::new(x, point(z), y)) - iso) as f32;
-            }
-        });
+    field.par_chunks_mut(n * n).enumerate().for_each(|(z, slab)| {
+        for (i, value) in slab.iter_mut().enumerate() {
+            // World y is the bulb's polar axis (its z), so the canonical camera sees it upright.
+            let (x, y) = (point(i % n), point(i / n));
+            *value = (distance_estimate(DVec3::new(x, point(z), y)) - iso) as f32;
+        }
+    });
     field
 }
 
 /// The edge directions of the grid: `axis` and the two others, with e_u × e_v = e_axis.
 fn frame(axis: usize) -> [UVec3; 3] {
-    [
-        UVec3::AXES[axis],
-        UVec3::AXES[(axis + 1) % 3],
-        UVec3::AXES[(axis + 2) % 3],
-    ]
+    [UVec3::AXES[axis], UVec3::AXES[(axis + 1) % 3], UVec3::AXES[(axis + 2) % 3]]
 }
 
 /// Adds one vertex per cell the level set crosses, at the mean of the crossing points on the
@@ -125,11 +109,7 @@ fn place_vertices(grid: &Grid, field: &[f32], mesh: &mut Mesh) -> Vec<u32> {
     let cells = grid.cells();
     let mut vertex_of = vec![u32::MAX; cells * cells * cells];
     for (index, slot) in vertex_of.iter_mut().enumerate() {
-        let (x, y, z) = (
-            index % cells,
-            index / cells % cells,
-            index / (cells * cells),
-        );
+        let (x, y, z) = (index % cells, index / cells % cells, index / (cells * cells));
         let c = UVec3::new(x as u32, y as u32, z as u32);
         let (mut sum, mut crossings) = (Vec3::ZERO, 0u32);
         for axis in 0..3 {

@@ -16,11 +16,7 @@ use crate::scene::Scene;
 fn solid(level: u32, p: UVec3) -> bool {
     let mut p = p;
     for _ in 0..level {
-        let ones = (p % 3)
-            .to_array()
-            .iter()
-            .filter(|&&digit| digit == 1)
-            .count();
+        let ones = (p % 3).to_array().iter().filter(|&&digit| digit == 1).count();
         if ones >= 2 {
             return false;
         }
@@ -47,8 +43,8 @@ pub(super) fn generate(level: u32) -> Scene {
                     }
                     for axis in 0..3 {
                         for positive in [false, true] {
-                            let neighbour = cell.as_ivec3()
-                                + Vec3::AXES[axis].as_ivec3() * if positive { 1 } else { -1 };
+                            let neighbour =
+                                cell.as_ivec3() + Vec3::AXES[axis].as_ivec3() * if positive { 1 } else { -1 };
                             let inside = neighbour.cmpge(glam::IVec3::ZERO).all()
                                 && neighbour.cmplt(glam::IVec3::splat(n as i32)).all();
                             if inside && solid(level, neighbour.as_uvec3()) {
@@ -56,8 +52,7 @@ pub(super) fn generate(level: u32) -> Scene {
                             }
                             let quad = cube_face(axis, positive).map(|corner| {
                                 let g = cell + corner;
-                                let slot =
-                                    &mut vertex_of[((g.z * side + g.y) * side + g.x) as usize];
+                                let slot = &mut vertex_of[((g.z * side + g.y) * side + g.x) as usize];
                                 if *slot == u32::MAX {
                                     *slot = mesh.push_vertex(g.as_vec3() * (2.0 / n as f32) - 1.0);
                                 }

@@ -21,10 +21,7 @@ pub(super) struct SceneBuilder {
 
 impl SceneBuilder {
     pub(super) fn new() -> Self {
-        Self {
-            mesh: Mesh::default(),
-            objects: Vec::new(),
-        }
+        Self { mesh: Mesh::default(), objects: Vec::new() }
     }
 
     /// The bounds of the triangles added so far.
@@ -55,14 +52,7 @@ impl SceneBuilder {
         let mut mesh = self.mesh;
         mesh.name = name.to_string();
         mesh.provenance = provenance.clone();
-        Scene {
-            name: name.to_string(),
-            provenance,
-            mesh,
-            objects: self.objects,
-            camera,
-            light,
-        }
+        Scene { name: name.to_string(), provenance, mesh, objects: self.objects, camera, light }
     }
 }
 
@@ -75,11 +65,7 @@ pub(super) fn cube_face(axis: usize, positive: bool) -> [UVec3; 4] {
     let (n, u, v) = (unit(axis), unit(axis + 1), unit(axis + 2));
     let base = if positive { n } else { UVec3::ZERO };
     let quad = [base, base + u, base + u + v, base + v];
-    if positive {
-        quad
-    } else {
-        [quad[0], quad[3], quad[2], quad[1]]
-    }
+    if positive { quad } else { [quad[0], quad[3], quad[2], quad[1]] }
 }
 
 /// Appends the two triangles of the quad `a b c d` (in winding order).
@@ -94,11 +80,7 @@ pub(super) fn push_quad(mesh: &mut Mesh, [a, b, c, d]: [u32; 4]) {
 pub(super) fn push_box(mesh: &mut Mesh, transform: Mat4, inward: bool) {
     let base = mesh.positions.len() as u32;
     for corner in 0..8u32 {
-        let unit = Vec3::new(
-            (corner & 1) as f32,
-            ((corner >> 1) & 1) as f32,
-            ((corner >> 2) & 1) as f32,
-        );
+        let unit = Vec3::new((corner & 1) as f32, ((corner >> 1) & 1) as f32, ((corner >> 2) & 1) as f32);
         mesh.positions.push(transform.transform_point3(unit - 0.5));
     }
     for axis in 0..3 {
@@ -116,13 +98,7 @@ pub(super) fn push_box(mesh: &mut Mesh, transform: Mat4, inward: bool) {
 /// vertex joined to its neighbouring ring by a fan; other points become rings of `slices` vertices.
 /// With `loop_profile` the last point joins the first (a torus); otherwise the surface is closed
 /// only if the profile starts and ends at a pole (an open profile gives an open band, e.g. a bowl).
-pub(super) fn push_lathe(
-    mesh: &mut Mesh,
-    profile: &[Vec2],
-    slices: u32,
-    loop_profile: bool,
-    transform: Mat4,
-) {
+pub(super) fn push_lathe(mesh: &mut Mesh, profile: &[Vec2], slices: u32, loop_profile: bool, transform: Mat4) {
     enum Ring {
         Pole(u32),
         Ring(u32),
@@ -132,8 +108,7 @@ pub(super) fn push_lathe(
         .map(|p| {
             let first = mesh.positions.len() as u32;
             if p.x == 0.0 {
-                mesh.positions
-                    .push(transform.transform_point3(Vec3::new(0.0, p.y, 0.0)));
+                mesh.positions.push(transform.transform_point3(Vec3::new(0.0, p.y, 0.0)));
                 return Ring::Pole(first);
             }
             for j in 0..slices {
@@ -152,9 +127,7 @@ pub(super) fn push_lathe(
             match (upper, lower) {
                 (Ring::Pole(p), Ring::Ring(r)) => mesh.indices.push([*p, r + next, r + j]),
                 (Ring::Ring(r), Ring::Pole(p)) => mesh.indices.push([*p, r + j, r + next]),
-                (Ring::Ring(a), Ring::Ring(b)) => {
-                    push_quad(mesh, [a + j, a + next, b + next, b + j])
-                }
+                (Ring::Ring(a), Ring::Ring(b)) => push_quad(mesh, [a + j, a + next, b + next, b + j]),
                 (Ring::Pole(_), Ring::Pole(_)) => {}
             }
         }
@@ -166,11 +139,7 @@ pub(super) fn sphere_profile(stacks: u32) -> Vec<Vec2> {
     (0..=stacks)
         .map(|i| {
             let theta = std::f32::consts::PI * i as f32 / stacks as f32;
-            let radius = if i == 0 || i == stacks {
-                0.0
-            } else {
-                theta.sin()
-            };
+            let radius = if i == 0 || i == stacks { 0.0 } else { theta.sin() };
             Vec2::new(radius, theta.cos())
         })
         .collect()

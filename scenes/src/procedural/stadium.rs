@@ -45,17 +45,14 @@ pub(super) fn generate(teapot: &Mesh, seed: u64) -> Scene {
     builder.object("ground", false, |mesh| {
         let first = mesh.positions.len() as u32;
         let corners = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)];
-        mesh.positions
-            .extend(corners.map(|(x, z)| Vec3::new(x * outer, 0.0, z * outer)));
+        mesh.positions.extend(corners.map(|(x, z)| Vec3::new(x * outer, 0.0, z * outer)));
         push_quad(mesh, [first, first + 1, first + 2, first + 3]); // normal +y
     });
     builder.object("masts", true, |mesh| {
         let mast_height = 3.0 * TIERS as f32 * RISER;
         for k in 0..MASTS {
-            let angle =
-                (k as f32 + rng.random_range(0.3..0.7)) * std::f32::consts::TAU / MASTS as f32;
-            let at = Vec3::new(angle.cos(), 0.0, angle.sin()) * (outer + 4.0)
-                + Vec3::Y * 0.5 * mast_height;
+            let angle = (k as f32 + rng.random_range(0.3..0.7)) * std::f32::consts::TAU / MASTS as f32;
+            let at = Vec3::new(angle.cos(), 0.0, angle.sin()) * (outer + 4.0) + Vec3::Y * 0.5 * mast_height;
             let transform = Mat4::from_scale_rotation_translation(
                 Vec3::new(1.5, mast_height, 1.5),
                 Quat::from_rotation_y(-angle),
@@ -68,24 +65,13 @@ pub(super) fn generate(teapot: &Mesh, seed: u64) -> Scene {
     // scaled so its diagonal is TEAPOT_FRACTION of the stadium's, standing at the centre.
     let stadium_diagonal = builder.bounds().diagonal();
     let bounds = teapot.bounds();
-    let scale = if bounds.diagonal() > 0.0 {
-        TEAPOT_FRACTION * stadium_diagonal / bounds.diagonal()
-    } else {
-        1.0
-    };
-    let centre_bottom = if bounds.is_empty() {
-        Vec3::ZERO
-    } else {
-        bounds.center().with_y(bounds.min.y)
-    };
+    let scale = if bounds.diagonal() > 0.0 { TEAPOT_FRACTION * stadium_diagonal / bounds.diagonal() } else { 1.0 };
+    let centre_bottom = if bounds.is_empty() { Vec3::ZERO } else { bounds.center().with_y(bounds.min.y) };
     let place = Mat4::from_scale(Vec3::splat(scale)) * Mat4::from_translation(-centre_bottom);
     if !teapot.indices.is_empty() {
         builder.object("teapot", false, |mesh| {
-            let geometry = Mesh {
-                positions: teapot.positions.clone(),
-                indices: teapot.indices.clone(),
-                ..Mesh::default()
-            };
+            let geometry =
+                Mesh { positions: teapot.positions.clone(), indices: teapot.indices.clone(), ..Mesh::default() };
             mesh.append(&geometry, place);
         });
     }
@@ -95,12 +81,7 @@ pub(super) fn generate(teapot: &Mesh, seed: u64) -> Scene {
     // and the pitch the lower: primary rays cross both the dense cells and the huge empty ones.
     let teapot_size = (bounds.diagonal() * scale).max(f32::MIN_POSITIVE);
     let target = Vec3::Y * 0.25 * teapot_size;
-    let camera = CameraSpec {
-        eye: Vec3::new(0.0, 2.0, 12.0) * teapot_size,
-        target,
-        up: Vec3::Y,
-        vfov_deg: 45.0,
-    };
+    let camera = CameraSpec { eye: Vec3::new(0.0, 2.0, 12.0) * teapot_size, target, up: Vec3::Y, vfov_deg: 45.0 };
     let provenance = format!(
         "accel-bench procedural::stadium seed={seed:#x}: {TIERS}-tier bowl ({SEGMENTS} segments, pitch radius \
          {PITCH_RADIUS}), ground quad, {MASTS} masts; teapot '{}' ({} triangles) scaled to 1/{} of the stadium diagonal",

@@ -25,8 +25,7 @@ pub(super) fn generate(seed: u64) -> Scene {
             for ix in 0..side {
                 let x = 2.0 * ix as f32 / CELLS as f32 - 1.0;
                 let z = 2.0 * iz as f32 / CELLS as f32 - 1.0;
-                mesh.positions
-                    .push(Vec3::new(x, AMPLITUDE * fbm(seed, x, z), z));
+                mesh.positions.push(Vec3::new(x, AMPLITUDE * fbm(seed, x, z), z));
             }
         }
         for iz in 0..CELLS {
@@ -72,9 +71,7 @@ fn value_noise(seed: u64, x: f32, z: f32) -> f32 {
 
 /// A hash of the lattice point and seed (SplitMix64's finaliser) mapped to [-1, 1).
 fn lattice_value(seed: u64, x: i64, z: i64) -> f32 {
-    let mut h = seed
-        ^ (x as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93)
-        ^ (z as u64).wrapping_mul(0xA076_1D64_78BD_642F);
+    let mut h = seed ^ (x as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ (z as u64).wrapping_mul(0xA076_1D64_78BD_642F);
     h = (h ^ (h >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     h = (h ^ (h >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     h ^= h >> 31;

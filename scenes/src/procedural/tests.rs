@@ -33,99 +33,47 @@ fn all_scenes(seed: u64) -> Vec<Scene> {
 /// Why triangles `first..first + count` are not a closed, consistently wound two-manifold: each
 /// directed edge must appear exactly once and its reverse exactly once.
 fn closed_surface_problem(mesh: &Mesh, object: &Object) -> Option<String> {
-    let range =
-        object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
-    let mut edges: Vec<(u32, u32)> = mesh.indices[range]
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
-        .collect();
+    let range = object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
+    let mut edges: Vec<(u32, u32)> =
+        mesh.indices[range].iter().flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)]).collect();
     edges.sort_unstable();
     if let Some(w) = edges.windows(2).find(|w| w[0] == w[1]) {
-        return Some(format!(
-            "{}: directed edge {:?} used twice",
-            object.name, w[0]
-        ));
+        return Some(format!("{}: directed edge {:?} used twice", object.name, w[0]));
     }
-    let lonely = edges
-        .iter()
-        .find(|&&(a, b)| edges.binary_search(&(b, a)).is_err())?;
-    Some(format!(
-        "{}: edge {lonely:?} has no reverse twin",
-        object.name
-    ))
+    let lonely = edges.iter().find(|&&(a, b)| edges.binary_search(&(b, a)).is_err())?;
+    Some(format!("{}: edge {lonely:?} has no reverse twin", object.name))
 }
 
 /// Six times the signed volume the object's triangles enclose: positive when wound outwards.
 fn signed_volume6(mesh: &Mesh, object: &Object) -> f64 {
-    let range =
-        object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
-    range
-        .map(|t| mesh.triangle(t).map(|p| p.as_dvec3()))
-        .map(|[a, b, c]| a.dot(b.cross(c)))
-        .sum()
+    let range = object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
+    range.map(|t| mesh.triangle(t).map(|p| p.as_dvec3())).map(|[a, b, c]| a.dot(b.cross(c))).sum()
 }
 
 #[test]
 fn every_scene_validates_and_its_objects_partition_the_triangles_and_closed_ones_are_closed() {
     for scene in all_scenes(SEED) {
-        scene
-            .mesh
-            .validate(&scene.name)
-            .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
-        assert!(
-            !scene.provenance.is_empty() && scene.provenance.contains("procedural::"),
-            "{}",
-            scene.name
-        );
+        scene.mesh.validate(&scene.name).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+        assert!(!scene.provenance.is_empty() && scene.provenance.contains("procedural::"), "{}", scene.name);
         assert_eq!(scene.mesh.provenance, scene.provenance);
         let mut next = 0;
         for object in &scene.objects {
-            assert_eq!(
-                object.first_triangle, next,
-                "{}: object {} not contiguous",
-                scene.name, object.name
-            );
-            assert!(
-                object.triangle_count > 0,
-                "{}: object {} empty",
-                scene.name,
-                object.name
-            );
+            assert_eq!(object.first_triangle, next, "{}: object {} not contiguous", scene.name, object.name);
+            assert!(object.triangle_count > 0, "{}: object {} empty", scene.name, object.name);
             next += object.triangle_count;
             if object.closed {
                 let problem = closed_surface_problem(&scene.mesh, object);
-                assert_eq!(
-                    problem, None,
-                    "{}: a closed object is not closed",
-                    scene.name
-                );
+                assert_eq!(problem, None, "{}: a closed object is not closed", scene.name);
             }
         }
-        assert_eq!(
-            next as usize,
-            scene.triangle_count(),
-            "{}: objects do not cover the mesh",
-            scene.name
-        );
+        assert_eq!(next as usize, scene.triangle_count(), "{}: objects do not cover the mesh", scene.name);
     }
 }
 
 #[test]
 fn scene_names_match_the_command_line() {
     let names: Vec<String> = all_scenes(SEED).into_iter().map(|s| s.name).collect();
-    assert_eq!(
-        names,
-        [
-            "grass-1k",
-            "stadium",
-            "terrain",
-            "menger",
-            "mandelbulb",
-            "city",
-            "flat",
-            "room"
-        ]
-    );
+    assert_eq!(names, ["grass-1k", "stadium", "terrain", "menger", "mandelbulb", "city", "flat", "room"]);
     assert_eq!(grass(12_345, 1).name, "grass-12345");
     assert_eq!(grass(1_000_000, 1).name, "grass-1000k");
 }
@@ -133,19 +81,11 @@ fn scene_names_match_the_command_line() {
 #[test]
 fn procedural_scenes_are_deterministic_and_seeded() {
     for (a, b) in all_scenes(SEED).into_iter().zip(all_scenes(SEED)) {
-        assert_eq!(
-            a, b,
-            "{} differs between two runs with the same seed",
-            a.name
-        );
+        assert_eq!(a, b, "{} differs between two runs with the same seed", a.name);
     }
     for (a, b) in all_scenes(SEED).into_iter().zip(all_scenes(SEED + 1)) {
         if !["menger", "mandelbulb"].contains(&a.name.as_str()) {
-            assert_ne!(
-                a.mesh.positions, b.mesh.positions,
-                "{} ignores its seed",
-                a.name
-            );
+            assert_ne!(a.mesh.positions, b.mesh.positions, "{} ignores its seed", a.name);
         }
     }
 }
@@ -157,8 +97,7 @@ fn grass_has_exactly_n_thin_triangles_in_the_unit_cube() {
         assert_eq!(scene.triangle_count(), n);
         let bounds = scene.bounds();
         assert!(
-            bounds.min.cmpge(Vec3::splat(-1e-6)).all()
-                && bounds.max.cmple(Vec3::splat(1.0 + 1e-6)).all(),
+            bounds.min.cmpge(Vec3::splat(-1e-6)).all() && bounds.max.cmple(Vec3::splat(1.0 + 1e-6)).all(),
             "{bounds:?}"
         );
         assert_eq!(scene.mesh.degenerate_count(), 0);
@@ -166,10 +105,7 @@ fn grass_has_exactly_n_thin_triangles_in_the_unit_cube() {
             let [a, b, c] = scene.mesh.triangle(t);
             let longest = (b - a).length().max((c - b).length()).max((a - c).length());
             let width = (b - a).cross(c - a).length() / longest; // the altitude onto the longest side
-            assert!(
-                width < 0.06 * longest && longest >= 0.9 * grass::MIN_LENGTH,
-                "triangle {t} is not a thin blade"
-            );
+            assert!(width < 0.06 * longest && longest >= 0.9 * grass::MIN_LENGTH, "triangle {t} is not a thin blade");
         }
     }
 }
@@ -179,18 +115,11 @@ fn flat_has_exactly_one_zero_extent_and_faces_up() {
     let scene = flat(SEED);
     assert_eq!(scene.triangle_count(), flat::TRIANGLES);
     let extent = scene.bounds().extent();
-    assert_eq!(
-        extent.to_array().iter().filter(|&&e| e == 0.0).count(),
-        1,
-        "{extent:?}"
-    );
+    assert_eq!(extent.to_array().iter().filter(|&&e| e == 0.0).count(), 1, "{extent:?}");
     assert_eq!(extent.y, 0.0);
     assert_eq!(scene.mesh.degenerate_count(), 0);
     let camera = scene.camera_spec();
-    assert!(
-        camera.eye.y > 0.2,
-        "the canonical camera must look down onto the plane: {camera:?}"
-    );
+    assert!(camera.eye.y > 0.2, "the canonical camera must look down onto the plane: {camera:?}");
     for t in 0..scene.triangle_count() {
         let [a, b, c] = scene.mesh.triangle(t);
         assert!((b - a).cross(c - a).y > 0.0, "triangle {t} faces down");
@@ -209,11 +138,7 @@ fn menger_is_a_closed_surface_with_the_analytic_count() {
         assert_eq!(scene.mesh.degenerate_count(), 0);
         let object = &scene.objects[0];
         assert!(object.closed);
-        assert_eq!(
-            closed_surface_problem(&scene.mesh, object),
-            None,
-            "level {level}"
-        );
+        assert_eq!(closed_surface_problem(&scene.mesh, object), None, "level {level}");
         // Outward winding: the enclosed volume is the 20^L cubes of side 2/3^L.
         let expected = 20f64.powi(level as i32) * (2.0 / 3f64.powi(level as i32)).powi(3);
         assert!((signed_volume6(&scene.mesh, object) / 6.0 - expected).abs() < 1e-3 * expected);
@@ -230,20 +155,13 @@ fn menger_is_a_closed_surface_with_the_analytic_count() {
 fn room_objects_are_closed_and_the_camera_and_light_are_inside() {
     let scene = room(SEED);
     let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-    assert_eq!(
-        names,
-        ["room", "box-a", "box-b", "sphere", "cylinder", "torus"]
-    );
+    assert_eq!(names, ["room", "box-a", "box-b", "sphere", "cylinder", "torus"]);
     for object in &scene.objects {
         assert!(object.closed, "{}", object.name);
         assert_eq!(closed_surface_problem(&scene.mesh, object), None);
         let volume = signed_volume6(&scene.mesh, object);
         // The room is wound inwards (negative volume), the objects outwards.
-        assert!(
-            (volume < 0.0) == (object.name == "room"),
-            "{} has volume {volume}",
-            object.name
-        );
+        assert!((volume < 0.0) == (object.name == "room"), "{} has volume {volume}", object.name);
     }
     assert_eq!(scene.mesh.degenerate_count(), 0);
     let room_box = scene.bounds();
@@ -269,20 +187,12 @@ fn city_buildings_are_closed_boxes() {
 fn stadium_dwarfs_its_teapot_and_looks_at_it() {
     let teapot = tetrahedron();
     let scene = stadium(&teapot, SEED);
-    let object = scene
-        .objects
-        .iter()
-        .find(|o| o.name == "teapot")
-        .expect("a teapot object");
+    let object = scene.objects.iter().find(|o| o.name == "teapot").expect("a teapot object");
     assert_eq!(object.triangle_count as usize, teapot.triangle_count());
-    let range =
-        object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
+    let range = object.first_triangle as usize..(object.first_triangle + object.triangle_count) as usize;
     let teapot_bounds = crate::geom::Aabb::from_points(range.flat_map(|t| scene.mesh.triangle(t)));
     let ratio = teapot_bounds.diagonal() / scene.bounds().diagonal();
-    assert!(
-        (ratio - 1.0 / 200.0).abs() < 1e-4,
-        "teapot/stadium = {ratio}"
-    );
+    assert!((ratio - 1.0 / 200.0).abs() < 1e-4, "teapot/stadium = {ratio}");
     let camera = scene.camera.expect("the stadium has its own camera");
     let to_teapot = (teapot_bounds.center() - camera.eye).normalize();
     assert!(to_teapot.dot((camera.target - camera.eye).normalize()) > 0.99);
@@ -291,10 +201,7 @@ fn stadium_dwarfs_its_teapot_and_looks_at_it() {
 #[test]
 fn terrain_is_a_height_field_with_relief() {
     let scene = terrain(SEED);
-    assert_eq!(
-        scene.triangle_count(),
-        2 * (terrain::CELLS * terrain::CELLS) as usize
-    );
+    assert_eq!(scene.triangle_count(), 2 * (terrain::CELLS * terrain::CELLS) as usize);
     assert_eq!(scene.mesh.degenerate_count(), 0);
     let extent = scene.bounds().extent();
     assert!(extent.y > 0.1 && extent.y < extent.x, "{extent:?}");
@@ -309,42 +216,26 @@ fn mandelbulb_is_finite_and_in_the_expected_size_range() {
     let scene = mandelbulb(MANDELBULB_RESOLUTION);
     assert!(scene.mesh.positions.iter().all(|p| p.is_finite()));
     let triangles = scene.triangle_count();
-    assert!(
-        (100_000..=300_000).contains(&triangles),
-        "{triangles} triangles"
-    );
+    assert!((100_000..=300_000).contains(&triangles), "{triangles} triangles");
     // Shared vertices: a closed-ish quad mesh has about half as many vertices as triangles.
     assert!(scene.mesh.positions.len() < triangles);
     // Watertight and wound outwards: every directed edge is matched by its reverse equally often
     // (surface nets may put four triangles on one edge, so not "exactly once").
-    let mut edges: Vec<(u32, u32)> = scene
-        .mesh
-        .indices
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
-        .collect();
+    let mut edges: Vec<(u32, u32)> =
+        scene.mesh.indices.iter().flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)]).collect();
     let mut reversed: Vec<(u32, u32)> = edges.iter().map(|&(a, b)| (b, a)).collect();
     edges.sort_unstable();
     reversed.sort_unstable();
-    assert!(
-        edges == reversed,
-        "the surface has holes or inconsistent winding"
-    );
+    assert!(edges == reversed, "the surface has holes or inconsistent winding");
     assert!(signed_volume6(&scene.mesh, &scene.objects[0]) > 0.0);
     let extent = scene.bounds().extent();
-    assert!(
-        extent.min_element() > 1.5 && extent.max_element() < 2.5,
-        "{extent:?}"
-    );
+    assert!(extent.min_element() > 1.5 && extent.max_element() < 2.5, "{extent:?}");
 }
 
 #[test]
 fn mandelbulb_does_not_depend_on_the_thread_count() {
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
         pool.install(|| mandelbulb(40))
     };
     assert_eq!(run(1), run(3));

@@ -52,9 +52,10 @@ impl BvhPreset {
 impl std::str::FromStr for BvhPreset {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL.into_iter().find(|p| p.name() == s).ok_or_else(|| {
-            format!("expected one of {}", Self::ALL.map(|p| p.name()).join(", "))
-        })
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| format!("expected one of {}", Self::ALL.map(|p| p.name()).join(", ")))
     }
 }
 
@@ -95,12 +96,7 @@ fn flatten(tree: &Bvh2) -> (Vec<BvhNode>, Vec<u32>, usize) {
     while let Some((src, dst, depth)) = pending.pop() {
         max_depth = max_depth.max(depth);
         let n = &tree.nodes[src];
-        let mut out = BvhNode {
-            min: n.aabb.min.to_array(),
-            max: n.aabb.max.to_array(),
-            first: 0,
-            count: n.prim_count,
-        };
+        let mut out = BvhNode { min: n.aabb.min.to_array(), max: n.aabb.max.to_array(), first: 0, count: n.prim_count };
         if n.prim_count > 0 {
             out.first = refs.len() as u32;
             let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
