@@ -116,22 +116,19 @@ fn rays_at_shared_edges_and_vertices_never_pass_through() {
                 // The ray starts outside the closed surface and crosses it at the target (t = far)
                 // at the latest; any hit must come no later than that.
                 let limit = far * (1.0 + 1e-5);
-                let brute = brute_force::intersect(&triangles, &ray, 0.0, f32::INFINITY);
-                assert!(
-                    brute.is_some_and(|h| h.t <= limit),
-                    "{}: {} target {} along {dir}: the triangle test lets the ray through ({brute:?})",
-                    closed.name,
-                    target.kind,
-                    target.point
-                );
-                let through_bvh = bvh.intersect(&ray, 0.0, f32::INFINITY);
-                assert!(
-                    through_bvh.is_some_and(|h| h.t <= limit),
-                    "{}: {} target {} along {dir}: the ray passes through the BVH ({through_bvh:?})",
-                    closed.name,
-                    target.kind,
-                    target.point
-                );
+                let hits = [
+                    ("every triangle (brute force)", brute_force::intersect(&triangles, &ray, 0.0, f32::INFINITY)),
+                    ("the BVH", bvh.intersect(&ray, 0.0, f32::INFINITY)),
+                ];
+                for (through, hit) in hits {
+                    assert!(
+                        hit.is_some_and(|h| h.t <= limit),
+                        "{}: {} target {} along {dir}: the ray passes through {through} ({hit:?})",
+                        closed.name,
+                        target.kind,
+                        target.point
+                    );
+                }
                 checked += 1;
             }
         }
