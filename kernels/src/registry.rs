@@ -18,15 +18,46 @@ pub struct StructureEntry {
     pub build: fn(&BuildInput) -> Result<Box<dyn Accel>, BuildError>,
 }
 
-pub static STRUCTURES: &[StructureEntry] = &[StructureEntry {
-    name: "bvh",
-    family: "triangle",
-    summary: "reference BVH: obvhs PLOC build, flattened to 32-byte nodes, robust ordered traversal",
-    build: build_bvh,
-}];
+pub static STRUCTURES: &[StructureEntry] = &[
+    StructureEntry {
+        name: "bvh",
+        family: "triangle",
+        summary: "reference BVH: obvhs PLOC build, flattened to 32-byte nodes, robust ordered traversal",
+        build: build_bvh,
+    },
+    StructureEntry {
+        name: "ug",
+        family: "triangle",
+        summary: "uniform grid, Eq. 1 (ug.lambda, default 5)",
+        build: |input| build_grid("ug", input),
+    },
+    StructureEntry {
+        name: "rg",
+        family: "triangle",
+        summary: "recursive grid, Jevans & Wyvill (rg.lambda 1, rg.gamma 16, rg.max_depth 3)",
+        build: |input| build_grid("rg", input),
+    },
+    StructureEntry {
+        name: "rg2",
+        family: "triangle",
+        summary: "two-level grid, Ize et al.: (8N)^0.6 top cells, 8·N_2 per cell",
+        build: |input| build_grid("rg2", input),
+    },
+    StructureEntry {
+        name: "org",
+        family: "triangle",
+        summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8)",
+        build: |input| build_grid("org", input),
+    },
+];
 
 fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
     Ok(Box::new(structures::bvh::build(input)?))
+}
+
+fn build_grid(name: &str, input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
+    let kind = structures::grid::GridKind::from_params(name, input.params)?;
+    Ok(Box::new(structures::grid::build(input, kind)?))
 }
 
 pub fn find_structure(name: &str) -> Option<&'static StructureEntry> {

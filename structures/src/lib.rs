@@ -8,8 +8,10 @@
 //! | module | structure | spec |
 //! |---|---|---|
 //! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
+//! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
 
 pub mod bvh;
+pub mod grid;
 pub mod memory;
 pub mod params;
 

@@ -104,3 +104,39 @@ pub fn compare_with_brute_force(accel: &dyn Traverse, triangles: &[Triangle], ra
         })
         .collect()
 }
+
+/// Brute force's answer for each ray — the nearest `t` and every triangle hit at it (see
+/// [`brute_force::nearest_set`]) — computed once so several structures can be checked against it
+/// (brute force is the slow part on the big scenes).
+pub fn brute_force_answers(triangles: &[Triangle], rays: &[TestRay]) -> Vec<(f32, Vec<u64>)> {
+    use rayon::prelude::*;
+    rays.par_iter().map(|r| brute_force::nearest_set(triangles, &r.ray, 0.0, f32::INFINITY)).collect()
+}
+
+/// [`compare_with_brute_force`] against answers from [`brute_force_answers`] for the same `rays`,
+/// with the same rule.
+pub fn compare_with_answers(accel: &dyn Traverse, rays: &[TestRay], answers: &[(f32, Vec<u64>)]) -> Vec<Mismatch> {
+    use rayon::prelude::*;
+    assert_eq!(rays.len(), answers.len(), "one answer per ray");
+    rays.par_iter()
+        .zip(answers)
+        .filter_map(|(r, (t, set))| {
+            let got = accel.intersect(&r.ray, 0.0, f32::INFINITY).map(|h| (h.t, h.prim));
+            let ok = match got {
+                None => set.is_empty(),
+                Some((gt, prim)) => (gt == *t && set.contains(&prim)) || (gt - t).abs() <= TIE_REL_T * t.abs(),
+            };
+            (!ok).then(|| Mismatch { ray: *r, got, expected_t: *t, expected_prims: set.clone() })
+        })
+        .collect()
+}
+
+/// A scene holding exactly `triangles` (three vertices each), for tests on hand-made geometry.
+pub fn scene_of(name: &str, triangles: &[Triangle]) -> Scene {
+    let mut mesh = scenes::Mesh::new(name, "test");
+    for tri in triangles {
+        let [a, b, c] = tri.map(|v| mesh.push_vertex(v));
+        mesh.indices.push([a, b, c]);
+    }
+    Scene::from_mesh(name, mesh)
+}

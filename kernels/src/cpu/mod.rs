@@ -3,5 +3,6 @@
 
 pub mod brute_force;
 pub mod bvh;
+pub mod grid;
 pub mod render;
 pub mod triangle;

@@ -1,0 +1,287 @@
+//! CPU kernel of the grid family (UG, RG, RG-2, ORG share one layout, `structures::grid::layout`):
+//! a hierarchical 3D-DDA — Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing"
+//! (Eurographics 1987) — per level, descending into a sub-grid with the ray clipped to the parent
+//! cell's span (DESIGN.md §4.5 "Traversal", seed 002). WGSL twin: (issue 5).
+//!
+//! **Exact cell spans.** Every boundary crossing `t` is computed afresh as
+//! `(boundary − origin) · inv_dir`, with the boundary from [`GridHeader::boundary`] — never by
+//! adding a per-cell `Δt` — so neighbouring cells share their boundary `t` bit for bit, and a
+//! sub-grid (whose box is exactly its parent cell's, from the same `boundary`) starts and ends at
+//! exactly its parent cell's boundary `t`s. The cells visited tile the ray's span without gaps.
+//!
+//! **Start cells in `t`.** A level's start cell is first guessed from the point at the entry `t`
+//! (`⌊(p − min)/cell_size⌋`, clamped to the grid), then corrected per moving axis against the
+//! boundary `t`s themselves until the entry `t` lies in the cell's span on that axis. The point
+//! and the boundary `t`s round differently; correcting in `t` makes the start consistent with the
+//! crossings the DDA will step through (a sub-grid's start cell on the axis its parent stepped is
+//! then always its first cell on that axis).
+//!
+//! **Robustness.** The direction is normalised (−0 → +0); an axis whose reciprocal is not finite
+//! (zero or denormal direction) never steps and its cell comes from the origin exactly, so no
+//! `0·inf` is ever formed in the DDA. A zero-extent axis (`cell_size` 0, one cell: the flat scene)
+//! is never divided by; a moving ray leaves it at its one plane. Each iteration either descends
+//! one level (at most `MAX_DEPTH − 1` times in a row) or moves one cell forward on one axis, so the
+//! loop ends after at most Σ res cells per level. No mailbox: a triangle listed in several cells
+//! is tested again in each (the early exit below makes that rare past the hit).
+
+use scenes::Ray;
+use structures::grid::{Grid, GridHeader, SUBGRID_BIT};
+
+use super::triangle::{ShearedRay, geometric_normal};
+use crate::{Counters, Hit, NoStats, Stats, Traverse};
+
+/// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (DESIGN.md §4.5), the cap the
+/// builder enforces (`structures::grid` `build::MAX_DEPTH`). The stack holds the parents of the
+/// current level, so `MAX_DEPTH − 1` entries.
+pub const MAX_DEPTH: usize = 8;
+
+/// `1 + 2·γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: the far slab distance scaled by it makes the f32
+/// clip of the ray to the top grid's box conservative (Ize 2013), as in `cpu::bvh`.
+const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// Relative margin of the early exit. Triangles are tested over the whole `(t_min, best_t)`, not
+/// only over the current cell's span, so a hit found in a cell but lying beyond it is kept as a
+/// candidate; traversal stops only once the best hit lies inside the cells already visited:
+/// `best_t + |best_t|·HIT_MARGIN < t_cell_out`. Any triangle listed only in later cells truly
+/// meets the ray at `t ≥ t_cell_out`, but its *computed* `t` can be smaller: the boundary `t` is
+/// off by ≲ 3 ulps, and the watertight test's `t` by far more at grazing angles. Without the margin
+/// a nearer-by-a-few-ulps triangle in the next cell would be skipped and the result would differ
+/// from brute force on the same triangle test. The same 1/8192 as `cpu::bvh`'s `CULL_MARGIN`; it
+/// costs one extra cell only when the hit lies within 0.012 % of the cell's exit.
+const HIT_MARGIN: f32 = 1.0 / 8192.0;
+
+/// The early-exit bound of a best hit at `t` (see [`HIT_MARGIN`]); `+inf` stays `+inf`.
+#[inline(always)]
+fn cull_bound(t: f32) -> f32 {
+    t + t.abs() * HIT_MARGIN
+}
+
+/// A ray prepared for the DDA and for the slab clip.
+struct DdaRay {
+    origin: [f32; 3],
+    dir: [f32; 3],
+    inv: [f32; 3],
+    /// +1 / −1 along the direction, 0 for an axis that never steps (reciprocal not finite).
+    step: [i32; 3],
+}
+
+/// The DDA state of one level: which grid, which cell, where its span starts and where the ray
+/// crosses the cell's far boundary on each axis (`+inf` on an axis that never steps).
+#[derive(Clone, Copy, Debug, Default)]
+struct Level {
+    header: u32,
+    cell: [u32; 3],
+    t_in: f32,
+    t_next: [f32; 3],
+}
+
+impl Level {
+    /// End of the current cell's span.
+    #[inline(always)]
+    fn t_out(&self) -> f32 {
+        self.t_next[0].min(self.t_next[1]).min(self.t_next[2])
+    }
+}
+
+impl DdaRay {
+    fn new(ray: &Ray) -> Self {
+        // `+ 0.0` turns −0 into +0, so a zero component's reciprocal is +inf, never −inf.
+        let dir = (ray.dir + 0.0).to_array();
+        let inv = dir.map(f32::recip);
+        let step = [0, 1, 2].map(|a| match inv[a] {
+            i if !i.is_finite() => 0,
+            i if i > 0.0 => 1,
+            _ => -1,
+        });
+        Self { origin: ray.origin.to_array(), dir, inv, step }
+    }
+
+    /// The span `[t0, t1]` of the ray inside the box of `h`, within `(t_min, t_max)`: the robust
+    /// slab test of `cpu::bvh` (NaN from `0·inf` on a box face never replaces a bound).
+    fn clip(&self, h: &GridHeader, t_min: f32, t_max: f32) -> Option<f32> {
+        let (mut t0, mut t1) = (t_min, t_max);
+        for a in 0..3 {
+            let (near, far) = if self.inv[a] < 0.0 { (h.max[a], h.min[a]) } else { (h.min[a], h.max[a]) };
+            let tn = (near - self.origin[a]) * self.inv[a];
+            let tf = (far - self.origin[a]) * self.inv[a] * ROBUST_FAR;
+            if tn > t0 {
+                t0 = tn;
+            }
+            if tf < t1 {
+                t1 = tf;
+            }
+        }
+        (t0 <= t1).then_some(t0)
+    }
+
+    /// `t` of the boundary plane `i` on a moving axis, by `GridHeader::boundary`'s arithmetic.
+    #[inline(always)]
+    fn boundary_t(&self, h: &GridHeader, a: usize, i: u32) -> f32 {
+        (h.boundary(a, i) - self.origin[a]) * self.inv[a]
+    }
+
+    /// Where the ray enters cell `c` on moving axis `a` (its near boundary).
+    #[inline(always)]
+    fn entry_t(&self, h: &GridHeader, a: usize, c: u32) -> f32 {
+        self.boundary_t(h, a, if self.step[a] > 0 { c } else { c + 1 })
+    }
+
+    /// Where the ray leaves cell `c` on axis `a` (its far boundary); `+inf` if `a` never steps.
+    #[inline(always)]
+    fn exit_t(&self, h: &GridHeader, a: usize, c: u32) -> f32 {
+        match self.step[a] {
+            0 => f32::INFINITY,
+            s => self.boundary_t(h, a, if s > 0 { c + 1 } else { c }),
+        }
+    }
+
+    /// The DDA state of grid `header` for a ray entering it at `t_in` (the top grid's clip entry,
+    /// or the parent cell's span start).
+    fn enter(&self, grid: &Grid, header: u32, t_in: f32) -> Level {
+        let h = &grid.headers[header as usize];
+        let mut cell = [0u32; 3];
+        let mut t_next = [f32::INFINITY; 3];
+        for a in 0..3 {
+            let last = h.res[a] - 1;
+            let (size, min) = (h.cell_size[a], h.min[a]);
+            if self.step[a] == 0 {
+                // Never steps: the cell holding the origin's coordinate, checked against the
+                // boundaries themselves (a ray lying in a boundary plane takes the upper cell).
+                let p = self.origin[a];
+                let mut c = guess_cell(p, min, size, last);
+                while c > 0 && h.boundary(a, c) > p {
+                    c -= 1;
+                }
+                while c < last && h.boundary(a, c + 1) <= p {
+                    c += 1;
+                }
+                cell[a] = c;
+                continue;
+            }
+            let p = self.origin[a] + self.dir[a] * t_in;
+            let mut c = guess_cell(p, min, size, last);
+            // Correct the guess in `t` until `entry_t(c) ≤ t_in ≤ exit_t(c)` (or a grid end is
+            // reached: the entry point lies outside the box by rounding, so clamp). On a tie the
+            // earlier cell is kept; it is then visited with an empty span, which is harmless.
+            let (first, end) = if self.step[a] > 0 { (0, last) } else { (last, 0) };
+            while c != first && self.entry_t(h, a, c) > t_in {
+                c = c.wrapping_add_signed(-self.step[a]);
+            }
+            while c != end && self.exit_t(h, a, c) < t_in {
+                c = c.wrapping_add_signed(self.step[a]);
+            }
+            cell[a] = c;
+            t_next[a] = self.exit_t(h, a, c);
+        }
+        Level { header, cell, t_in, t_next }
+    }
+
+    /// ADVANCE: steps `lv` into the next cell of its grid; `false` once the ray leaves the grid
+    /// (or no boundary lies ahead on any axis).
+    #[inline(always)]
+    fn advance(&self, grid: &Grid, lv: &mut Level) -> bool {
+        // The axis crossed first; ties go to the lowest axis (the other follows with an empty span).
+        let a = if lv.t_next[0] <= lv.t_next[1] {
+            if lv.t_next[0] <= lv.t_next[2] { 0 } else { 2 }
+        } else if lv.t_next[1] <= lv.t_next[2] {
+            1
+        } else {
+            2
+        };
+        let t = lv.t_next[a];
+        // Not `t == inf`: also leaves on NaN, so no input can make this loop spin.
+        if !(t < f32::INFINITY) {
+            return false;
+        }
+        let h = &grid.headers[lv.header as usize];
+        let c = lv.cell[a].wrapping_add_signed(self.step[a]);
+        // Leaving below 0 wraps to u32::MAX, so one comparison covers both ends.
+        if c >= h.res[a] {
+            return false;
+        }
+        lv.cell[a] = c;
+        lv.t_in = t;
+        lv.t_next[a] = self.exit_t(h, a, c);
+        true
+    }
+}
+
+/// `⌊(p − min) / size⌋` clamped to `[0, last]`; 0 on a zero-extent axis (never divided by) and for
+/// a NaN quotient (`as` maps NaN to 0; the WGSL twin must test for it).
+#[inline(always)]
+fn guess_cell(p: f32, min: f32, size: f32, last: u32) -> u32 {
+    if size > 0.0 { ((p - min) / size).floor().clamp(0.0, last as f32) as u32 } else { 0 }
+}
+
+fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    let top = grid.headers.first()?;
+    let dda = DdaRay::new(ray);
+    let t_enter = dda.clip(top, t_min, t_max)?;
+    let sheared = ShearedRay::new(ray);
+    let mut best_t = t_max;
+    let mut cull_t = cull_bound(t_max);
+    let mut best_prim = u32::MAX;
+    // Parents of the current level, innermost last.
+    let mut stack = [Level::default(); MAX_DEPTH - 1];
+    let mut sp = 0usize;
+    let mut cur = dda.enter(grid, 0, t_enter);
+    'traverse: loop {
+        stats.step();
+        stats.visit();
+        let h = &grid.headers[cur.header as usize];
+        let cell = (h.first_cell + h.cell_index(cur.cell[0], cur.cell[1], cur.cell[2])) as usize;
+        let refs = &grid.refs[grid.cells[cell] as usize..grid.cells[cell + 1] as usize];
+        if let &[link] = refs
+            && link & SUBGRID_BIT != 0
+        {
+            // PUSH: the sub-grid covers exactly this cell; run its DDA over this cell's span.
+            let Some(slot) = stack.get_mut(sp) else {
+                panic!("grid hierarchy deeper than MAX_DEPTH = {MAX_DEPTH} levels");
+            };
+            *slot = cur;
+            sp += 1;
+            stats.push();
+            cur = dda.enter(grid, link & !SUBGRID_BIT, cur.t_in);
+            continue 'traverse;
+        }
+        for &r in refs {
+            stats.prim_test();
+            if let Some(t) = sheared.intersect(&grid.triangles[r as usize], t_min, best_t) {
+                best_t = t;
+                cull_t = cull_bound(t);
+                best_prim = r;
+            }
+        }
+        loop {
+            // Early exit: the best hit lies in the cells visited so far (see `HIT_MARGIN`).
+            if cull_t < cur.t_out() {
+                break 'traverse;
+            }
+            // ADVANCE within this grid, or POP to the parent's DDA once the sub-grid is exhausted.
+            if dda.advance(grid, &mut cur) {
+                continue 'traverse;
+            }
+            if sp == 0 {
+                break 'traverse;
+            }
+            sp -= 1;
+            stats.pop();
+            cur = stack[sp];
+        }
+    }
+    (best_prim != u32::MAX).then(|| Hit {
+        t: best_t,
+        normal: geometric_normal(&grid.triangles[best_prim as usize]),
+        prim: u64::from(best_prim),
+    })
+}
+
+impl Traverse for Grid {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, &mut NoStats)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, counters)
+    }
+}

@@ -1,0 +1,282 @@
+//! Builds any grid kind: the top grid, then level by level the sub-grids of the cells the kind
+//! subdivides (in parallel across sub-grids), then one flattening pass into the compact layout.
+//! Phases in the order of seed 002: resolution (Algorithms 1–2), count, prefix sum, fill,
+//! subdivide.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::{Aabb, Triangle};
+
+use super::layout::{GridHeader, SUBGRID_BIT};
+use super::level::{LevelGrid, build_level, cell_range, header, range_cells};
+use super::resolution::{algorithm2, cells, eq1};
+use super::{Grid, GridKind, LevelStats};
+use crate::{BuildError, BuildInput};
+
+/// The deepest hierarchy any kind builds (seed 002 §2: MAXDEPTH = 4 × 2 = 8); the kernels'
+/// stacks are sized by it.
+pub const MAX_DEPTH: u32 = 8;
+
+/// The most triangle references any grid may hold (256 MiB). Recursive grids without ORG's
+/// safeguards multiply references level by level (seed 002 §2: β^k·N at level k) — on the `flat`
+/// scene RG's third level alone would need a billion. A level whose sub-grids would pass this
+/// budget is not built: the grid stops one level higher and says so in its parameters
+/// (`budget_stop`), instead of exhausting memory. (The paper caps RG's depth for the same reason.)
+pub const MAX_REFS: u64 = 1 << 26;
+
+impl GridKind {
+    /// The kind called `name` (`ug`, `rg`, `rg2`, `org`) with its parameters read from
+    /// `params` as `<name>.<param>` (e.g. `org.lambda=2`), defaulting as DESIGN.md §4.5 says.
+    pub fn from_params(name: &str, params: &crate::Params) -> Result<Self, BuildError> {
+        let key = |k: &str| format!("{name}.{k}");
+        let kind = match name {
+            "ug" => GridKind::Ug { lambda: params.get(&key("lambda"), 5.0)? },
+            "rg" => GridKind::Rg {
+                lambda: params.get(&key("lambda"), 1.0)?,
+                gamma: params.get(&key("gamma"), 16)?,
+                max_depth: params.get(&key("max_depth"), 3)?,
+            },
+            "rg2" => GridKind::Rg2,
+            "org" => GridKind::Org {
+                lambda: params.get(&key("lambda"), 1.0)?,
+                alpha: params.get(&key("alpha"), 2.0)?,
+                gamma: params.get(&key("gamma"), 16)?,
+                max_depth: params.get(&key("max_depth"), MAX_DEPTH)?,
+            },
+            _ => return Err(BuildError::BadParam { key: name.into(), detail: "not a grid kind".into() }),
+        };
+        kind.check()?;
+        Ok(kind)
+    }
+
+    fn check(&self) -> Result<(), BuildError> {
+        let bad = |key: &str, detail: &str| {
+            Err(BuildError::BadParam { key: format!("{}.{key}", self.name()), detail: detail.into() })
+        };
+        match *self {
+            GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } | GridKind::Org { lambda, .. } if !positive(lambda) => {
+                bad("lambda", "must be positive")
+            }
+            GridKind::Org { alpha, .. } if !positive(alpha) => bad("alpha", "must be positive"),
+            GridKind::Rg { max_depth, .. } | GridKind::Org { max_depth, .. }
+                if !(1..=MAX_DEPTH).contains(&max_depth) =>
+            {
+                bad("max_depth", "must be 1..=8")
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// True for a positive number (false for NaN).
+fn positive(x: f32) -> bool {
+    x > 0.0
+}
+
+/// A grid under construction: its level grid and which of its cells have sub-grids.
+struct Node {
+    level: LevelGrid,
+    /// `(cell, node index)`, ascending by cell.
+    children: Vec<(u32, u32)>,
+}
+
+/// A cell chosen for subdivision, with the sub-grid's resolution.
+struct Split {
+    parent: u32,
+    cell: u32,
+    res: [u32; 3],
+    /// ORG: references at the unreduced resolution (for β).
+    unreduced_refs: u64,
+    /// References the sub-grid will hold.
+    refs: u64,
+}
+
+pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
+    let tris = &input.triangles;
+    if tris.len() >= SUBGRID_BIT as usize {
+        return Err(BuildError::Limit {
+            structure: kind.name(),
+            detail: format!("{} triangles; at most 2^31", tris.len()),
+        });
+    }
+    let bboxes: Vec<Aabb> = tris.par_iter().map(triangle_box).collect();
+    let bounds = bboxes.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
+    let bounds = if bounds.is_empty() { Aabb::new(Vec3::ZERO, Vec3::ZERO) } else { bounds };
+    let all: Vec<u32> = (0..tris.len() as u32).collect();
+
+    // The top grid.
+    let n = tris.len() as f64;
+    let extent = bounds.max - bounds.min;
+    let res = match kind {
+        GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } => eq1(extent, f64::from(lambda) * n),
+        GridKind::Rg2 => eq1(extent, (8.0 * n).powf(0.6)),
+        GridKind::Org { lambda, alpha, .. } => {
+            algorithm2(extent, f64::from(lambda) * n, alpha, mean_extent(&all, &bboxes, &bounds))
+        }
+    };
+    let top = build_level(header(bounds, res, 1), &all, &bboxes, true);
+    let mut nodes = vec![Node { level: top, children: Vec::new() }];
+    let mut levels = Vec::new();
+    let mut stored_refs = nodes[0].level.refs.len() as u64;
+    let mut budget_stop = None;
+
+    // Sub-grids, level by level.
+    let mut frontier = 0..1u32;
+    loop {
+        let depth = nodes[frontier.start as usize].level.header.depth;
+        let splits: Vec<Split> = frontier
+            .clone()
+            .into_par_iter()
+            .flat_map_iter(|g| splits_of(kind, g, &nodes[g as usize].level, &bboxes))
+            .collect();
+        let new_refs: u64 = splits.iter().map(|s| s.refs).sum();
+        let splits = if stored_refs + new_refs > MAX_REFS {
+            budget_stop = Some(depth + 1);
+            Vec::new()
+        } else {
+            stored_refs += new_refs;
+            splits
+        };
+        let first_new = nodes.len() as u32;
+        let built: Vec<LevelGrid> = splits
+            .par_iter()
+            .map(|s| {
+                let parent = &nodes[s.parent as usize].level;
+                let b = cell_box(&parent.header, s.cell);
+                build_level(header(b, s.res, depth + 1), parent.cell_refs(s.cell as usize), &bboxes, false)
+            })
+            .collect();
+        levels.push(level_stats(&nodes, frontier.clone(), &splits, kind));
+        for (i, s) in splits.iter().enumerate() {
+            nodes[s.parent as usize].children.push((s.cell, first_new + i as u32));
+        }
+        nodes.extend(built.into_iter().map(|level| Node { level, children: Vec::new() }));
+        if splits.is_empty() {
+            break;
+        }
+        frontier = first_new..nodes.len() as u32;
+    }
+    let (headers, cells, refs) = flatten(&nodes);
+    Ok(Grid { kind, headers, cells, refs, triangles: input.triangles.clone(), levels, budget_stop })
+}
+
+/// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions.
+fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb]) -> Vec<Split> {
+    let h = &level.header;
+    let depth = h.depth;
+    let mut out = Vec::new();
+    for cell in 0..h.cell_count() {
+        let refs = level.cell_refs(cell as usize);
+        let n_i = refs.len() as f64;
+        if refs.is_empty() {
+            continue;
+        }
+        let b = cell_box(h, cell);
+        let extent = b.max - b.min;
+        let split = match kind {
+            GridKind::Ug { .. } => None,
+            GridKind::Rg { lambda, gamma, max_depth } => {
+                (refs.len() > gamma as usize && depth < max_depth).then(|| (eq1(extent, f64::from(lambda) * n_i), 0))
+            }
+            GridKind::Rg2 => (depth == 1).then(|| (eq1(extent, 8.0 * n_i), 0)),
+            GridKind::Org { lambda, alpha, gamma, max_depth } if depth < max_depth => {
+                // β: the references the sub-grid would hold at the unreduced resolution (λ·N_i
+                // cells), counted from the triangles' cell ranges, over the N_i in the cell.
+                let mean = mean_extent(refs, bboxes, &b);
+                let unreduced = algorithm2(extent, f64::from(lambda) * n_i, alpha, mean);
+                let count = count_refs(&header(b, unreduced, depth + 1), refs, bboxes);
+                let beta = (count as f64 / n_i).max(1.0);
+                let res = algorithm2(extent, f64::from(lambda) * n_i / beta, alpha, mean);
+                // The γ cut-off on the prospective sub-grid's cell count (seed 002 §2).
+                (cells(res) >= u64::from(gamma)).then_some((res, count))
+            }
+            GridKind::Org { .. } => None,
+        };
+        if let Some((res, unreduced_refs)) = split {
+            let refs = count_refs(&header(b, res, depth + 1), refs, bboxes);
+            out.push(Split { parent: g, cell, res, unreduced_refs, refs });
+        }
+    }
+    out
+}
+
+fn level_stats(nodes: &[Node], frontier: std::ops::Range<u32>, splits: &[Split], kind: GridKind) -> LevelStats {
+    let grids = &nodes[frontier.start as usize..frontier.end as usize];
+    let split_refs: u64 =
+        splits.iter().map(|s| nodes[s.parent as usize].level.cell_refs(s.cell as usize).len() as u64).sum();
+    let all_refs: u64 = grids.iter().map(|n| n.level.refs.len() as u64).sum();
+    let beta = matches!(kind, GridKind::Org { .. }) && split_refs > 0;
+    LevelStats {
+        depth: grids[0].level.header.depth,
+        grids: grids.len() as u64,
+        cells: grids.iter().map(|n| u64::from(n.level.header.cell_count())).sum(),
+        refs: all_refs - split_refs,
+        subdivided_cells: splits.len() as u64,
+        beta: beta.then(|| splits.iter().map(|s| s.unreduced_refs).sum::<u64>() as f64 / split_refs as f64),
+    }
+}
+
+/// Lays the nodes out as headers, prefix-summed cells and references (see `layout`).
+fn flatten(nodes: &[Node]) -> (Vec<GridHeader>, Vec<u32>, Vec<u32>) {
+    let total_cells: usize = nodes.iter().map(|n| n.level.header.cell_count() as usize + 1).sum();
+    let mut headers = Vec::with_capacity(nodes.len());
+    let mut cells = Vec::with_capacity(total_cells);
+    let mut refs = Vec::new();
+    for node in nodes {
+        let mut h = node.level.header;
+        h.first_cell = cells.len() as u32;
+        headers.push(h);
+        let mut children = node.children.iter().peekable();
+        for c in 0..h.cell_count() {
+            cells.push(refs.len() as u32);
+            match children.peek() {
+                Some(&&(cell, child)) if cell == c => {
+                    refs.push(SUBGRID_BIT | child);
+                    children.next();
+                }
+                _ => refs.extend_from_slice(node.level.cell_refs(c as usize)),
+            }
+        }
+        cells.push(refs.len() as u32);
+    }
+    (headers, cells, refs)
+}
+
+/// The box of cell `cell` of grid `h`, with corners from [`GridHeader::boundary`] so it matches
+/// the DDA's cell boundaries exactly.
+fn cell_box(h: &GridHeader, cell: u32) -> Aabb {
+    let (rx, ry) = (h.res[0], h.res[1]);
+    let idx = [cell % rx, (cell / rx) % ry, cell / (rx * ry)];
+    let lo = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a])));
+    let hi = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a] + 1)));
+    Aabb::new(lo, hi)
+}
+
+/// References a grid would hold for `tris`, from their cell ranges alone (no cells touched).
+fn count_refs(h: &GridHeader, tris: &[u32], bboxes: &[Aabb]) -> u64 {
+    tris.iter()
+        .map(|&t| {
+            let (lo, hi) = cell_range(h, &bboxes[t as usize]);
+            range_cells(lo, hi)
+        })
+        .sum()
+}
+
+/// LF_avg of Algorithm 2: the mean extent per axis of the triangles' boxes clipped to `within`.
+fn mean_extent(tris: &[u32], bboxes: &[Aabb], within: &Aabb) -> Vec3 {
+    if tris.is_empty() {
+        return Vec3::ZERO;
+    }
+    let sum: Vec3 = tris
+        .iter()
+        .map(|&t| {
+            let b = &bboxes[t as usize];
+            (b.max.min(within.max) - b.min.max(within.min)).max(Vec3::ZERO)
+        })
+        .sum();
+    sum / tris.len() as f32
+}
+
+fn triangle_box(t: &Triangle) -> Aabb {
+    Aabb::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+}

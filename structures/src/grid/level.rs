@@ -1,0 +1,160 @@
+//! One uniform grid over a box — the step every grid kind repeats per (sub-)grid: count pass,
+//! prefix sum, fill pass (seed 002 §1; no per-cell lists anywhere).
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::Aabb;
+
+use super::layout::GridHeader;
+
+/// A grid before flattening: its header (without `first_cell`), local offsets and references.
+pub(super) struct LevelGrid {
+    pub header: GridHeader,
+    /// `M + 1` prefix-summed offsets into `refs`.
+    pub offsets: Vec<u32>,
+    /// Triangle ids, ascending within each cell.
+    pub refs: Vec<u32>,
+}
+
+impl LevelGrid {
+    pub fn cell_refs(&self, cell: usize) -> &[u32] {
+        &self.refs[self.offsets[cell] as usize..self.offsets[cell + 1] as usize]
+    }
+}
+
+/// The header of a grid of resolution `res` over `bounds`.
+pub(super) fn header(bounds: Aabb, res: [u32; 3], depth: u32) -> GridHeader {
+    let extent = bounds.max - bounds.min;
+    let size = Vec3::from_array([0, 1, 2].map(|a| extent[a] / res[a] as f32));
+    GridHeader {
+        min: bounds.min.to_array(),
+        max: bounds.max.to_array(),
+        cell_size: size.to_array(),
+        res,
+        depth,
+        ..GridHeader::default()
+    }
+}
+
+/// The cells a triangle's bounding box overlaps, inclusive per axis, clamped to the grid. The box
+/// is widened by a few ulps of the grid's coordinates so a triangle lying exactly on a cell
+/// boundary is listed in the cells on both sides (the DDA may enter either first).
+pub(super) fn cell_range(h: &GridHeader, b: &Aabb) -> ([u32; 3], [u32; 3]) {
+    let mut lo = [0u32; 3];
+    let mut hi = [0u32; 3];
+    for a in 0..3 {
+        let size = h.cell_size[a];
+        let last = h.res[a] - 1;
+        if size <= 0.0 || last == 0 {
+            continue;
+        }
+        let slack = 4.0 * f32::EPSILON * h.min[a].abs().max(h.max[a].abs()) + 1e-4 * size;
+        let cell = |x: f32| ((x - h.min[a]) / size).floor().clamp(0.0, last as f32) as u32;
+        lo[a] = cell(b.min[a] - slack);
+        hi[a] = cell(b.max[a] + slack);
+    }
+    (lo, hi)
+}
+
+/// Number of cells a triangle's range covers.
+pub(super) fn range_cells(lo: [u32; 3], hi: [u32; 3]) -> u64 {
+    (0..3).map(|a| u64::from(hi[a] - lo[a] + 1)).product()
+}
+
+fn for_each_cell(h: &GridHeader, lo: [u32; 3], hi: [u32; 3], mut f: impl FnMut(usize)) {
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            for x in lo[0]..=hi[0] {
+                f(h.cell_index(x, y, z) as usize);
+            }
+        }
+    }
+}
+
+/// Builds one grid over `tris` (ids into `bboxes`). `parallel` spreads the triangles over rayon
+/// with atomic counters and cursors, then sorts each cell's references so the result does not
+/// depend on thread timing; the sequential path fills in input order, already sorted when the
+/// input is.
+pub(super) fn build_level(header: GridHeader, tris: &[u32], bboxes: &[Aabb], parallel: bool) -> LevelGrid {
+    let m = header.cell_count() as usize;
+    if parallel { build_parallel(header, m, tris, bboxes) } else { build_sequential(header, m, tris, bboxes) }
+}
+
+fn build_sequential(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb]) -> LevelGrid {
+    // Count pass.
+    let mut offsets = vec![0u32; m + 1];
+    let ranges: Vec<([u32; 3], [u32; 3])> = tris.iter().map(|&t| cell_range(&header, &bboxes[t as usize])).collect();
+    for &(lo, hi) in &ranges {
+        for_each_cell(&header, lo, hi, |c| offsets[c + 1] += 1);
+    }
+    // Prefix sum.
+    for c in 0..m {
+        offsets[c + 1] += offsets[c];
+    }
+    // Fill pass.
+    let mut cursor = offsets.clone();
+    let mut refs = vec![0u32; offsets[m] as usize];
+    for (&t, &(lo, hi)) in tris.iter().zip(&ranges) {
+        for_each_cell(&header, lo, hi, |c| {
+            refs[cursor[c] as usize] = t;
+            cursor[c] += 1;
+        });
+    }
+    LevelGrid { header, offsets, refs }
+}
+
+fn build_parallel(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb]) -> LevelGrid {
+    // Count pass.
+    let counts: Vec<AtomicU32> = (0..m).map(|_| AtomicU32::new(0)).collect();
+    tris.par_iter().for_each(|&t| {
+        let (lo, hi) = cell_range(&header, &bboxes[t as usize]);
+        for_each_cell(&header, lo, hi, |c| {
+            counts[c].fetch_add(1, Ordering::Relaxed);
+        });
+    });
+    // Prefix sum.
+    let mut offsets = Vec::with_capacity(m + 1);
+    let mut total = 0u32;
+    offsets.push(0);
+    for c in &counts {
+        total += c.load(Ordering::Relaxed);
+        offsets.push(total);
+    }
+    // Fill pass: the counters become write cursors.
+    for (c, cursor) in counts.iter().enumerate() {
+        cursor.store(offsets[c], Ordering::Relaxed);
+    }
+    let slots: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    tris.par_iter().for_each(|&t| {
+        let (lo, hi) = cell_range(&header, &bboxes[t as usize]);
+        for_each_cell(&header, lo, hi, |c| {
+            let slot = counts[c].fetch_add(1, Ordering::Relaxed);
+            slots[slot as usize].store(t, Ordering::Relaxed);
+        });
+    });
+    let mut refs: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
+    sort_cells(&offsets, &mut refs);
+    LevelGrid { header, offsets, refs }
+}
+
+/// Sorts every cell's references, in parallel over groups of cells.
+fn sort_cells(offsets: &[u32], refs: &mut [u32]) {
+    const GROUP: usize = 4096;
+    let m = offsets.len() - 1;
+    let mut groups = Vec::with_capacity(m.div_ceil(GROUP));
+    let mut rest = refs;
+    for g in (0..m).step_by(GROUP) {
+        let end = (g + GROUP).min(m);
+        let (head, tail) = rest.split_at_mut((offsets[end] - offsets[g]) as usize);
+        groups.push((g, end, head));
+        rest = tail;
+    }
+    groups.into_par_iter().for_each(|(g, end, slice)| {
+        let base = offsets[g];
+        for c in g..end {
+            slice[(offsets[c] - base) as usize..(offsets[c + 1] - base) as usize].sort_unstable();
+        }
+    });
+}

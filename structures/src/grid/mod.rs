@@ -1,0 +1,122 @@
+//! The grid family of seed 002 (Li & Wang 2011, "Optimizing grid construction in linear
+//! complexity") and its baselines, all in one compact layout ([`layout`]) traversed by one
+//! hierarchical 3D-DDA (`kernels::cpu::grid`):
+//!
+//! | kind | resolution | hierarchy |
+//! |---|---|---|
+//! | `ug` | Eq. 1, `M_i = L_i·∛(λN/V)` | one level |
+//! | `rg` | Eq. 1 per cell, λ·N_i cells | cells with > γ triangles subdivided, depth cap (Jevans & Wyvill 1989) |
+//! | `rg2` | `(8N)^0.6` top cells, `8·N_2` per cell | two levels (Ize et al. 2007) |
+//! | `org` | Algorithms 1 + 2 | every non-empty cell a candidate; λ·N_i/β cells; γ cut-off; depth ≤ 8 |
+//!
+//! Triangles are indexed by bounding-box overlap with cells (no exact triangle/box test), as in
+//! the paper; the boxes are widened by a few ulps of the grid so a triangle lying exactly on a
+//! cell boundary is listed on both sides.
+
+pub mod build;
+pub mod layout;
+mod level;
+pub mod resolution;
+#[cfg(test)]
+mod tests;
+mod validate;
+
+use std::sync::Arc;
+
+use scenes::Triangle;
+use serde::Serialize;
+
+use crate::{MemoryReport, Structure};
+pub use build::{MAX_DEPTH, MAX_REFS, build};
+pub use layout::{GridHeader, SUBGRID_BIT};
+
+/// Which member of the family, and its parameters (defaults: seed 002 §3 and DESIGN.md §4.5).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum GridKind {
+    /// Uniform grid, Eq. 1.
+    Ug { lambda: f32 },
+    /// Recursive grid: cells with more than `gamma` triangles get λ·N_i cells, up to `max_depth`.
+    Rg { lambda: f32, gamma: u32, max_depth: u32 },
+    /// Two-level grid: `(8N)^0.6` top-level cells, `8·N_2` cells in every non-empty one.
+    Rg2,
+    /// Optimized recursive grid: Algorithms 1–2 with `alpha`, sub-grids of λ·N_i/β cells, no
+    /// subdivision when the prospective sub-grid has fewer than `gamma` cells, `max_depth` levels.
+    Org { lambda: f32, alpha: f32, gamma: u32, max_depth: u32 },
+}
+
+impl GridKind {
+    pub fn name(&self) -> &'static str {
+        match self {
+            GridKind::Ug { .. } => "ug",
+            GridKind::Rg { .. } => "rg",
+            GridKind::Rg2 => "rg2",
+            GridKind::Org { .. } => "org",
+        }
+    }
+}
+
+/// What one level of the hierarchy holds, for the report (seed 002 §2's per-level accounting).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LevelStats {
+    /// Level, 1 = the top grid.
+    pub depth: u32,
+    pub grids: u64,
+    pub cells: u64,
+    /// Triangle references stored in this level's leaf cells.
+    pub refs: u64,
+    /// Cells of this level refined into sub-grids.
+    pub subdivided_cells: u64,
+    /// ORG: the pointer ratio β of the sub-grids made from this level's cells, as references at
+    /// the unreduced resolution over the triangles of the subdivided cells (counted, not guessed).
+    pub beta: Option<f64>,
+}
+
+/// A built grid: the layout plus the statistics of its build.
+pub struct Grid {
+    pub kind: GridKind,
+    pub headers: Vec<GridHeader>,
+    pub cells: Vec<u32>,
+    pub refs: Vec<u32>,
+    /// The scene's triangle soup (shared, not counted in [`Structure::memory`]).
+    pub triangles: Arc<[Triangle]>,
+    pub levels: Vec<LevelStats>,
+    /// The level that was not built because it would have passed [`build::MAX_REFS`].
+    pub budget_stop: Option<u32>,
+}
+
+impl Grid {
+    /// N_c: cells over all levels.
+    pub fn cell_count(&self) -> u64 {
+        self.levels.iter().map(|l| l.cells).sum()
+    }
+
+    /// N_p: triangle references (sub-grid links not included).
+    pub fn triangle_ref_count(&self) -> u64 {
+        self.levels.iter().map(|l| l.refs).sum()
+    }
+}
+
+impl Structure for Grid {
+    fn name(&self) -> &'static str {
+        self.kind.name()
+    }
+
+    fn memory(&self) -> MemoryReport {
+        let links = self.headers.len().saturating_sub(1) as u64;
+        MemoryReport::new(self.cell_count(), self.triangle_ref_count())
+            .with("cells", (self.cells.len() * size_of::<u32>()) as u64)
+            .with("references", self.triangle_ref_count() * size_of::<u32>() as u64)
+            .with("sub-grid links", links * size_of::<u32>() as u64)
+            .with("sub-grid headers", (self.headers.len() * size_of::<GridHeader>()) as u64)
+    }
+
+    fn params(&self) -> serde_json::Value {
+        serde_json::json!({
+            "grid": self.kind,
+            "triangle_cell_test": "bounding box",
+            "levels": self.levels,
+            "budget_stop": self.budget_stop,
+        })
+    }
+}

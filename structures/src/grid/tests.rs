@@ -1,0 +1,140 @@
+//! Builder tests: layout invariants, conservative coverage, and each kind's resolution rules.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+use scenes::Aabb;
+
+use super::layout::SUBGRID_BIT;
+use super::resolution::{algorithm2, cells, eq1};
+use super::{Grid, GridKind, build};
+use crate::{BuildInput, Params};
+
+const KINDS: [GridKind; 4] = [
+    GridKind::Ug { lambda: 5.0 },
+    GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 },
+    GridKind::Rg2,
+    GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 },
+];
+
+fn grid(scene: &str, kind: GridKind) -> (scenes::Scene, Grid) {
+    let scene = scenes::load_scene(scene).expect("scene loads");
+    let params = Params::default();
+    let g = build(&BuildInput { scene: &scene, triangles: scene.triangles(), params: &params }, kind).expect("builds");
+    (scene, g)
+}
+
+/// Every leaf cell with its box and references, at any depth.
+fn leaf_cells(g: &Grid) -> Vec<(Aabb, &[u32])> {
+    let mut out = Vec::new();
+    for h in &g.headers {
+        let (rx, ry) = (h.res[0], h.res[1]);
+        for c in 0..h.cell_count() {
+            let first = (h.first_cell + c) as usize;
+            let refs = &g.refs[g.cells[first] as usize..g.cells[first + 1] as usize];
+            if refs.first().is_some_and(|&r| r & SUBGRID_BIT != 0) {
+                continue;
+            }
+            let idx = [c % rx, (c / rx) % ry, c / (rx * ry)];
+            let lo = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a])));
+            let hi = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a] + 1)));
+            out.push((Aabb::new(lo, hi), refs));
+        }
+    }
+    out
+}
+
+#[test]
+fn every_kind_is_valid_on_awkward_scenes() {
+    for scene in ["teapot", "flat", "grass-1k", "stadium", "room"] {
+        for kind in KINDS {
+            let (_, g) = grid(scene, kind);
+            g.validate().unwrap_or_else(|e| panic!("{scene}, {}: {e}", kind.name()));
+            assert!(g.levels.len() as u32 <= super::MAX_DEPTH);
+            assert!(g.triangle_ref_count() <= super::MAX_REFS);
+        }
+    }
+}
+
+#[test]
+fn leaf_cells_list_every_triangle_whose_box_overlaps_them() {
+    // The conservative-coverage property the DDA relies on, checked against every triangle.
+    for kind in KINDS {
+        let (scene, g) = grid("teapot", kind);
+        let tris = scene.triangles();
+        for (b, refs) in leaf_cells(&g) {
+            for (t, tri) in tris.iter().enumerate() {
+                let tb = Aabb::from_points(tri.iter().copied());
+                let overlaps = tb.min.cmple(b.max).all() && tb.max.cmpge(b.min).all();
+                assert!(
+                    !overlaps || refs.binary_search(&(t as u32)).is_ok(),
+                    "{}: triangle {t} overlaps leaf cell {b:?} but is not listed",
+                    kind.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn ug_is_one_level_at_eq1() {
+    let (scene, g) = grid("bunny", GridKind::Ug { lambda: 5.0 });
+    assert_eq!(g.headers.len(), 1);
+    let extent = scene.bounds().extent();
+    assert_eq!(g.headers[0].res, eq1(extent, 5.0 * scene.triangle_count() as f64));
+    assert_eq!(g.cell_count(), cells(g.headers[0].res));
+}
+
+#[test]
+fn org_top_level_follows_algorithm2_and_subgrids_respect_gamma() {
+    let org = GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 };
+    let (scene, g) = grid("bunny", org);
+    let tris = scene.triangles();
+    let mean = tris.iter().map(|t| Aabb::from_points(t.iter().copied()).extent()).sum::<Vec3>() / tris.len() as f32;
+    let expected = algorithm2(scene.bounds().extent(), tris.len() as f64, 2.0, mean);
+    assert_eq!(g.headers[0].res, expected);
+    // The teapot in the stadium is the case hierarchy exists for.
+    let (_, g) = grid("stadium", org);
+    assert!(g.headers.len() > 1, "the stadium subdivides");
+    assert!(g.headers[1..].iter().all(|h| h.cell_count() >= 16), "a sub-grid below γ cells");
+    for level in &g.levels[..g.levels.len() - 1] {
+        let beta = level.beta.expect("β recorded where cells were subdivided");
+        assert!(beta >= 1.0, "β = {beta}");
+    }
+}
+
+#[test]
+fn rg_on_the_flat_scene_stops_at_the_reference_budget() {
+    let (_, g) = grid("flat", GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 });
+    assert_eq!(g.budget_stop, Some(3), "RG's third level on `flat` needs ~10^9 references");
+    assert!(g.headers.iter().all(|h| h.depth <= 2));
+}
+
+#[test]
+fn rg2_has_exactly_two_levels_and_rg_stops_at_its_cap() {
+    let (_, g) = grid("dragon-11k", GridKind::Rg2);
+    assert!(g.headers.iter().all(|h| h.depth <= 2) && g.headers.iter().any(|h| h.depth == 2));
+    let (_, g) = grid("dragon-11k", GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 2 });
+    assert!(g.headers.iter().all(|h| h.depth <= 2));
+}
+
+#[test]
+fn bad_parameters_are_rejected_by_name() {
+    let p = Params::parse(["org.alpha=-1"]).expect("parses");
+    let err = GridKind::from_params("org", &p).expect_err("negative α").to_string();
+    assert!(err.contains("org.alpha"), "{err}");
+    let p = Params::parse(["rg.max_depth=12"]).expect("parses");
+    assert!(GridKind::from_params("rg", &p).is_err());
+    assert!(GridKind::from_params("kd", &Params::default()).is_err());
+}
+
+#[test]
+fn builds_are_deterministic() {
+    let scene = scenes::load_scene("dragon-11k").expect("loads");
+    let params = Params::default();
+    let input = BuildInput { scene: &scene, triangles: Arc::clone(&scene.triangles()), params: &params };
+    let kind = GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 };
+    let a = build(&input, kind).expect("builds");
+    let b = build(&input, kind).expect("builds");
+    assert!(a.headers == b.headers && a.cells == b.cells && a.refs == b.refs);
+}
