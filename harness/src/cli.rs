@@ -48,8 +48,17 @@ pub enum Preset {
     Quick,
     /// Every built-in scene except the two largest dragons, at 256×256: small enough for CI.
     Ci,
-    /// Every built-in scene at 1024×1024.
+    /// Every built-in scene at 1024×1024, every structure.
     Default,
+    /// Seed 002 Fig. 1: Eq. 1 (`ug`, λ = 1) against Algorithm 2 (`org`, one level) on grass,
+    /// N = 1K…100K: pointers, build and render time, with fitted growth exponents.
+    OrgFig1,
+    /// Seed 002 Fig. 2: RG against ORG over the dragon's four resolutions and its subdivision
+    /// to 3.5 M triangles: cells, pointers, build and render time, with fitted growth exponents.
+    OrgFig2,
+    /// Seed 002 Table 1: ORG, UG, RG, RG-2 and the reference BVH on every built-in scene at
+    /// 500×500, in the paper's layout (N_c, N_p, T_c, T_r with ratios to ORG).
+    OrgTable1,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,6 +147,8 @@ pub struct Plan {
     pub threads: usize,
     pub warmup: u32,
     pub reps: u32,
+    /// Structure parameters: the preset's, then the user's (later entries win).
+    pub params: Vec<String>,
 }
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
@@ -148,6 +159,30 @@ impl Preset {
             Preset::Quick => "quick",
             Preset::Ci => "ci",
             Preset::Default => "default",
+            Preset::OrgFig1 => "org-fig1",
+            Preset::OrgFig2 => "org-fig2",
+            Preset::OrgTable1 => "org-table1",
+        }
+    }
+
+    fn structures(self) -> Vec<String> {
+        let list: Vec<&str> = match self {
+            Preset::Quick | Preset::Ci | Preset::Default => kernels::STRUCTURES.iter().map(|s| s.name).collect(),
+            Preset::OrgFig1 => vec!["ug", "org"],
+            Preset::OrgFig2 => vec!["rg", "org"],
+            Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
+        };
+        list.into_iter().map(String::from).collect()
+    }
+
+    /// Parameters the preset sets (the user's `--param` overrides them).
+    fn params(self) -> &'static [&'static str] {
+        match self {
+            // Fig. 1 compares two single-level grids at the same λ.
+            Preset::OrgFig1 => &["ug.lambda=1", "org.max_depth=1"],
+            // The paper caps RG at depth 2 on the dragon to keep it in memory (seed 002 §3).
+            Preset::OrgFig2 | Preset::OrgTable1 => &["rg.max_depth=2"],
+            _ => &[],
         }
     }
 
@@ -157,7 +192,11 @@ impl Preset {
             Preset::Ci => {
                 scenes::BUILTIN_SCENES.iter().copied().filter(|s| !matches!(*s, "dragon" | "dragon-203k")).collect()
             }
-            Preset::Default => scenes::BUILTIN_SCENES.to_vec(),
+            Preset::Default | Preset::OrgTable1 => scenes::BUILTIN_SCENES.to_vec(),
+            Preset::OrgFig1 => {
+                vec!["grass-1k", "grass-2k", "grass-5k", "grass-10k", "grass-20k", "grass-50k", "grass-100k"]
+            }
+            Preset::OrgFig2 => vec!["dragon-11k", "dragon-48k", "dragon-203k", "dragon", "dragon@sub1"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -166,6 +205,8 @@ impl Preset {
         match self {
             Preset::Quick | Preset::Ci => (256, 256),
             Preset::Default => (1024, 1024),
+            Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
+            Preset::OrgTable1 => (500, 500),
         }
     }
 }
@@ -183,7 +224,7 @@ impl RunArgs {
         Plan {
             preset,
             scenes: if self.scenes.is_empty() { preset.scenes() } else { self.scenes.clone() },
-            structures: if self.structures.is_empty() { vec!["bvh".into()] } else { self.structures.clone() },
+            structures: if self.structures.is_empty() { preset.structures() } else { self.structures.clone() },
             backends,
             workloads: workloads
                 .into_iter()
@@ -198,6 +239,7 @@ impl RunArgs {
             threads: self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
+            params: preset.params().iter().map(|p| p.to_string()).chain(self.params.iter().cloned()).collect(),
         }
     }
 }

@@ -27,7 +27,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     check_optimised(args.allow_unoptimized)?;
     let plan = args.plan();
     validate(&plan)?;
-    let params = Params::parse(args.params.iter().map(String::as_str))?;
+    let params = Params::parse(plan.params.iter().map(String::as_str))?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
 
     let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();

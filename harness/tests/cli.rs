@@ -26,7 +26,17 @@ const TINY: &[&str] = &["--width", "48", "--height", "32", "--reps", "2", "--war
 fn a_run_writes_results_report_and_images() {
     let out = temp_dir("run");
     let out_arg = out.to_string_lossy().into_owned();
-    let mut args = vec!["run", "--scenes", "teapot,flat", "--out", &out_arg, "--workload", "primary,shadow"];
+    let mut args = vec![
+        "run",
+        "--scenes",
+        "teapot,flat",
+        "--structures",
+        "bvh",
+        "--out",
+        &out_arg,
+        "--workload",
+        "primary,shadow",
+    ];
     args.extend_from_slice(TINY);
     let o = harness(&args);
     assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
@@ -78,7 +88,7 @@ fn a_bad_scene_stops_the_run_and_keeps_finished_cases() {
     std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").expect("write bad file");
     let scenes = format!("teapot,{}", bad.display());
     let out_arg = out.join("run").to_string_lossy().into_owned();
-    let mut args = vec!["run", "--scenes", &scenes, "--out", &out_arg];
+    let mut args = vec!["run", "--scenes", &scenes, "--structures", "bvh", "--out", &out_arg];
     args.extend_from_slice(TINY);
     let o = harness(&args);
     assert!(!o.status.success());

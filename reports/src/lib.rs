@@ -3,6 +3,7 @@
 
 pub mod images;
 pub mod markdown;
+pub mod paper;
 pub mod schema;
 
 pub use schema::*;

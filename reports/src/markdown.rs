@@ -14,6 +14,7 @@ pub fn report(results: &Results) -> String {
             scenes.push(&case.scene);
         }
     }
+    out.push_str(&crate::paper::section(results));
     for scene in scenes {
         let cases: Vec<&Case> = results.cases.iter().filter(|c| c.scene == scene).collect();
         scene_section(&mut out, &cases);

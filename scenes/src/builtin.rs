@@ -56,8 +56,30 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
 }
 
 /// Resolves a scene name: a built-in scene, `grass-<N>` (N like `2500`, `10k`, `1m`), or a path
-/// to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file.
+/// to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
+/// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
 pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
+    // Only `@sub<k>` is a modifier; any other `@` belongs to the name (a file path may hold one).
+    let modifier = name.rsplit_once('@').and_then(|(base, m)| {
+        let k = m.strip_prefix("sub")?.parse::<u32>().ok().filter(|&k| k <= 6)?;
+        Some((base, k))
+    });
+    if let Some((base, levels)) = modifier {
+        let mut scene = load_scene(base)?;
+        scene.mesh = crate::subdivide::subdivide(&scene.mesh, levels);
+        scene.provenance = scene.mesh.provenance.clone();
+        let factor = 4u32.pow(levels);
+        for o in &mut scene.objects {
+            o.first_triangle *= factor;
+            o.triangle_count *= factor;
+        }
+        scene.name = name.into();
+        return Ok(scene);
+    }
+    load_unmodified(name)
+}
+
+fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
     if let Some(scene) = shipped_asset(name) {
         return scene;
     }
@@ -114,6 +136,16 @@ mod tests {
         assert_eq!(parse_count("0"), None);
         assert_eq!(parse_count("k"), None);
         assert_eq!(parse_count("ten"), None);
+    }
+
+    #[test]
+    fn subdivision_modifier_multiplies_triangles() {
+        let base = load_scene("teapot").expect("teapot");
+        let sub = load_scene("teapot@sub1").expect("teapot@sub1");
+        assert_eq!(sub.triangle_count(), 4 * base.triangle_count());
+        assert_eq!(sub.name, "teapot@sub1");
+        assert_eq!(sub.objects.iter().map(|o| o.triangle_count as usize).sum::<usize>(), sub.triangle_count());
+        assert!(load_scene("teapot@x2").is_err() && load_scene("teapot@sub9").is_err());
     }
 
     #[test]

@@ -12,6 +12,7 @@ pub mod load;
 pub mod mesh;
 pub mod procedural;
 pub mod scene;
+pub mod subdivide;
 
 pub use builtin::{BUILTIN_SCENES, load_scene};
 pub use camera::{Camera, CameraSpec};

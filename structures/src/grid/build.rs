@@ -54,7 +54,9 @@ impl GridKind {
             Err(BuildError::BadParam { key: format!("{}.{key}", self.name()), detail: detail.into() })
         };
         match *self {
-            GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } | GridKind::Org { lambda, .. } if !positive(lambda) => {
+            GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } | GridKind::Org { lambda, .. }
+                if !positive(lambda) =>
+            {
                 bad("lambda", "must be positive")
             }
             GridKind::Org { alpha, .. } if !positive(alpha) => bad("alpha", "must be positive"),
@@ -179,6 +181,7 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb]) -> Vec<
                 (refs.len() > gamma as usize && depth < max_depth).then(|| (eq1(extent, f64::from(lambda) * n_i), 0))
             }
             GridKind::Rg2 => (depth == 1).then(|| (eq1(extent, 8.0 * n_i), 0)),
+            GridKind::Org { lambda, gamma, .. } if f64::from(lambda) * n_i < min_target_for(gamma) => None,
             GridKind::Org { lambda, alpha, gamma, max_depth } if depth < max_depth => {
                 // β: the references the sub-grid would hold at the unreduced resolution (λ·N_i
                 // cells), counted from the triangles' cell ranges, over the N_i in the cell.
@@ -250,6 +253,23 @@ fn cell_box(h: &GridHeader, cell: u32) -> Aabb {
     let lo = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a])));
     let hi = Vec3::from_array([0, 1, 2].map(|a| h.boundary(a, idx[a] + 1)));
     Aabb::new(lo, hi)
+}
+
+/// The smallest cell-count target for which Algorithm 2 can return `gamma` or more cells.
+///
+/// Algorithm 2 only lowers Algorithm 1's resolutions, so consider Algorithm 1. With rounding
+/// `M = ⌊x + 0.5⌋`, a resolution (M_i, M_j, M_k) needs every x ≥ M − 0.5, and its target is the
+/// product of the x's (case 4), or of two (case 3, where the third axis is 1 and no x is 0.5), or
+/// the one (case 2). The cheapest way to reach ≥ γ cells is case 4 with (γ, 1, 1):
+/// (γ − 0.5) · 0.5 · 0.5. (Other shapes cost more for γ ≥ 3: (γ/2, 2, 1) costs
+/// 0.375γ − 0.375; case 3's (γ, 1) costs (γ − 0.5) · 0.5; case 2 costs γ − 0.5.) So a cell whose
+/// unreduced target λ·N_i is below (γ − 0.5)/4 cannot be subdivided whatever β is (β ≥ 1 only
+/// lowers the target), and ORG skips its two counting passes. On the dragon this skips most of
+/// the top level's cells, which hold one or two triangles each. Algorithm 1 treats targets
+/// below 1 as 1, so for γ ≤ 4 (bound ≤ 1) nothing can be skipped and the bound is 0.
+pub(crate) fn min_target_for(gamma: u32) -> f64 {
+    let bound = (f64::from(gamma) - 0.5) / 4.0;
+    if gamma >= 3 && bound > 1.0 { bound } else { 0.0 }
 }
 
 /// References a grid would hold for `tris`, from their cell ranges alone (no cells touched).

@@ -119,6 +119,30 @@ fn rg2_has_exactly_two_levels_and_rg_stops_at_its_cap() {
 }
 
 #[test]
+fn targets_below_the_bound_never_reach_gamma_cells() {
+    // The proof in `min_target_for`, checked over many box shapes and targets.
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    assert_eq!(super::build::min_target_for(4), 0.0, "targets under 1 count as 1");
+    for gamma in [5u32, 8, 16, 27, 64] {
+        let bound = super::build::min_target_for(gamma);
+        for _ in 0..20_000 {
+            let e = Vec3::new(rng.random::<f32>(), rng.random::<f32>(), rng.random::<f32>())
+                .map(|v| if v < 0.1 { 0.0 } else { (v * 10.0).exp() });
+            let t = rng.random_range(0.0..bound);
+            let m = super::resolution::algorithm1(e, t);
+            assert!(cells(m) < u64::from(gamma), "γ {gamma}: target {t} on {e} gives {m:?}");
+        }
+        // And the bound is tight: just above it, (γ, 1, 1) is reachable.
+        let reach = super::resolution::algorithm1(
+            Vec3::new(1.0, 0.5 / (gamma as f32 - 0.5), 0.5 / (gamma as f32 - 0.5)),
+            bound * 1.001,
+        );
+        assert!(cells(reach) >= u64::from(gamma), "γ {gamma}: {reach:?}");
+    }
+}
+
+#[test]
 fn bad_parameters_are_rejected_by_name() {
     let p = Params::parse(["org.alpha=-1"]).expect("parses");
     let err = GridKind::from_params("org", &p).expect_err("negative α").to_string();
