@@ -48,7 +48,7 @@ pub enum Preset {
     Quick,
     /// Every built-in scene except the two largest dragons, at 256×256: small enough for CI.
     Ci,
-    /// Every built-in scene at 1024×1024, every structure.
+    /// Every built-in scene at 512×512, every structure.
     Default,
     /// Seed 002 Fig. 1: Eq. 1 (`ug`, λ = 1) against Algorithm 2 (`org`, one level) on grass,
     /// N = 1K…100K: pointers, build and render time, with fitted growth exponents.
@@ -204,7 +204,7 @@ impl Preset {
     fn size(self) -> (u32, u32) {
         match self {
             Preset::Quick | Preset::Ci => (256, 256),
-            Preset::Default => (1024, 1024),
+            Preset::Default => (512, 512),
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
         }

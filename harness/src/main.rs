@@ -59,7 +59,7 @@ fn list(what: ListWhat) {
         println!("presets:");
         println!("  quick      bunny, teapot, dragon-11k, menger, flat at 256×256");
         println!("  ci         every built-in scene but dragon and dragon-203k, at 256×256");
-        println!("  default    every built-in scene at 1024×1024, every structure (the default)");
+        println!("  default    every built-in scene at 512×512, every structure (the default)");
         println!("  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on grass-1k…100k");
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");
         println!("  org-table1 seed 002 Table 1: org, ug, rg, rg2, bvh on every built-in scene at 500×500");

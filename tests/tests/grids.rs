@@ -375,6 +375,74 @@ fn dda_visits_exactly_the_cells_on_the_ray() {
     assert_eq!(count(&one, &miss, 0.0, f32::INFINITY).node_visits, 0);
 }
 
+/// The ray's span `[t0, t1]` inside the box `[lo, hi]` from `t_min` on, in f64 (a test oracle).
+fn span_f64(ray: &Ray, lo: Vec3, hi: Vec3, t_min: f64) -> (f64, f64) {
+    let (mut t0, mut t1) = (t_min, f64::INFINITY);
+    for a in 0..3 {
+        let (o, d) = (f64::from(ray.origin[a]), f64::from(ray.dir[a]));
+        let (l, h) = (f64::from(lo[a]), f64::from(hi[a]));
+        if d == 0.0 {
+            if o < l || o > h {
+                return (1.0, 0.0);
+            }
+            continue;
+        }
+        let (ta, tb) = ((l - o) / d, (h - o) / d);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    (t0, t1)
+}
+
+#[test]
+fn visits_exactly_the_cells_the_ray_crosses_at_every_level() {
+    // With nothing to hit (no early exit), a ray visits every cell of every level it crosses, and
+    // no other: between the cells it crosses over a clearly positive length (computed in f64)
+    // and those it comes within a hair of. Catches DDAs that are right but wasteful (a sub-grid
+    // walked from its first cell instead of from where the ray enters it, say).
+    let nothing: Vec<Triangle> = vec![[BOX_MIN, BOX_MIN, BOX_MIN]];
+    let grid = hand_grid(&nothing, BOX_MIN, BOX_MAX, &two_level_spec(true));
+    let mut all_cells = Vec::new();
+    for h in &grid.headers {
+        for z in 0..h.res[2] {
+            for y in 0..h.res[1] {
+                for x in 0..h.res[0] {
+                    all_cells.push(cell_box(h, [x, y, z]));
+                }
+            }
+        }
+    }
+    let mut rng = Pcg64Mcg::seed_from_u64(0xCE11);
+    let ext = BOX_MAX - BOX_MIN;
+    let mut exact = 0;
+    for i in 0..3_000 {
+        let o = BOX_MIN - ext * 0.3 + ext * 1.6 * Vec3::new(rng.random(), rng.random(), rng.random());
+        let mut d = random_unit(&mut rng);
+        if i % 3 == 0 {
+            d[i % 9 / 3] = 0.0; // some axis-parallel planes too
+        }
+        let ray = Ray::new(o, d);
+        let t_min = if i % 2 == 0 { 0.0 } else { rng.random_range(0.0..4.0) };
+        let (mut surely, mut maybe) = (0, 0);
+        for &(lo, hi) in &all_cells {
+            let (t0, t1) = span_f64(&ray, lo, hi, f64::from(t_min));
+            let len = t1 - t0;
+            surely += usize::from(len > 1e-4);
+            maybe += usize::from(len > -1e-4);
+        }
+        let mut c = Counters::default();
+        assert!(grid.intersect_counted(&ray, t_min, f32::INFINITY, &mut c).is_none());
+        let visits = c.node_visits as usize;
+        assert!(
+            (surely..=maybe).contains(&visits),
+            "ray {ray:?} from t {t_min}: {visits} visits, crosses {surely} to {maybe} cells"
+        );
+        exact += usize::from(visits == surely);
+        assert_eq!(c.pushes, c.pops, "ray {ray:?}: every sub-grid entered is left");
+    }
+    assert!(exact > 2_900, "only {exact} of 3000 rays visit exactly the cells they clearly cross");
+}
+
 #[test]
 fn stops_in_the_cell_of_the_hit() {
     // A wall filling cell plane x ∈ cell 1 stops the DDA there: 2 cells visited, not 4.

@@ -9,20 +9,22 @@
 //! sub-grid (whose box is exactly its parent cell's, from the same `boundary`) starts and ends at
 //! exactly its parent cell's boundary `t`s. The cells visited tile the ray's span without gaps.
 //!
-//! **Start cells in `t`.** A level's start cell is first guessed from the point at the entry `t`
-//! (`⌊(p − min)/cell_size⌋`, clamped to the grid), then corrected per moving axis against the
-//! boundary `t`s themselves until the entry `t` lies in the cell's span on that axis. The point
-//! and the boundary `t`s round differently; correcting in `t` makes the start consistent with the
-//! crossings the DDA will step through (a sub-grid's start cell on the axis its parent stepped is
-//! then always its first cell on that axis).
+//! **Start cells.** A level starts in the cell `⌊(p − min)/cell_size⌋` of the point `p` at its
+//! entry `t`, clamped per axis to the grid (the point may lie a rounding error outside); on an
+//! axis that never steps `p` is the origin's coordinate exactly. That is the arithmetic the
+//! builder's `cell_range` uses to list a triangle's bounding box, so a ray lying in the plane of a
+//! triangle's box side lands in a cell that lists the triangle. Where the point and the boundary
+//! `t`s round differently (a ray entering a cell within an ulp of its edge), the start may be one
+//! cell past where the `t`s would put it for that sliver; the triangle lists are widened by more
+//! than that rounding (`structures::grid` `level::cell_range`), so nothing is lost.
 //!
 //! **Robustness.** The direction is normalised (−0 → +0); an axis whose reciprocal is not finite
 //! (zero or denormal direction) never steps and its cell comes from the origin exactly, so no
 //! `0·inf` is ever formed in the DDA. A zero-extent axis (`cell_size` 0, one cell: the flat scene)
 //! is never divided by; a moving ray leaves it at its one plane. Each iteration either descends
-//! one level (at most `MAX_DEPTH − 1` times in a row) or moves one cell forward on one axis, so the
-//! loop ends after at most Σ res cells per level. No mailbox: a triangle listed in several cells
-//! is tested again in each (the early exit below makes that rare past the hit).
+//! one level (at most `MAX_DEPTH − 1` times in a row) or moves one cell forward on one axis, so a
+//! grid is left after at most `res.x + res.y + res.z` cells. No mailbox: a triangle listed in
+//! several cells is tested again in each.
 
 use scenes::Ray;
 use structures::grid::{Grid, GridHeader, SUBGRID_BIT};
@@ -120,12 +122,6 @@ impl DdaRay {
         (h.boundary(a, i) - self.origin[a]) * self.inv[a]
     }
 
-    /// Where the ray enters cell `c` on moving axis `a` (its near boundary).
-    #[inline(always)]
-    fn entry_t(&self, h: &GridHeader, a: usize, c: u32) -> f32 {
-        self.boundary_t(h, a, if self.step[a] > 0 { c } else { c + 1 })
-    }
-
     /// Where the ray leaves cell `c` on axis `a` (its far boundary); `+inf` if `a` never steps.
     #[inline(always)]
     fn exit_t(&self, h: &GridHeader, a: usize, c: u32) -> f32 {
@@ -142,36 +138,9 @@ impl DdaRay {
         let mut cell = [0u32; 3];
         let mut t_next = [f32::INFINITY; 3];
         for a in 0..3 {
-            let last = h.res[a] - 1;
-            let (size, min) = (h.cell_size[a], h.min[a]);
-            if self.step[a] == 0 {
-                // Never steps: the cell holding the origin's coordinate, checked against the
-                // boundaries themselves (a ray lying in a boundary plane takes the upper cell).
-                let p = self.origin[a];
-                let mut c = guess_cell(p, min, size, last);
-                while c > 0 && h.boundary(a, c) > p {
-                    c -= 1;
-                }
-                while c < last && h.boundary(a, c + 1) <= p {
-                    c += 1;
-                }
-                cell[a] = c;
-                continue;
-            }
-            let p = self.origin[a] + self.dir[a] * t_in;
-            let mut c = guess_cell(p, min, size, last);
-            // Correct the guess in `t` until `entry_t(c) ≤ t_in ≤ exit_t(c)` (or a grid end is
-            // reached: the entry point lies outside the box by rounding, so clamp). On a tie the
-            // earlier cell is kept; it is then visited with an empty span, which is harmless.
-            let (first, end) = if self.step[a] > 0 { (0, last) } else { (last, 0) };
-            while c != first && self.entry_t(h, a, c) > t_in {
-                c = c.wrapping_add_signed(-self.step[a]);
-            }
-            while c != end && self.exit_t(h, a, c) < t_in {
-                c = c.wrapping_add_signed(self.step[a]);
-            }
-            cell[a] = c;
-            t_next[a] = self.exit_t(h, a, c);
+            let p = if self.step[a] == 0 { self.origin[a] } else { self.origin[a] + self.dir[a] * t_in };
+            cell[a] = start_cell(p, h.min[a], h.cell_size[a], h.res[a] - 1);
+            t_next[a] = self.exit_t(h, a, cell[a]);
         }
         Level { header, cell, t_in, t_next }
     }
@@ -189,8 +158,9 @@ impl DdaRay {
             2
         };
         let t = lv.t_next[a];
-        // Not `t == inf`: also leaves on NaN, so no input can make this loop spin.
-        if !(t < f32::INFINITY) {
+        // No boundary ahead (an axis that never steps), or NaN from a degenerate input: leave,
+        // so no input can make this loop spin.
+        if !t.is_finite() {
             return false;
         }
         let h = &grid.headers[lv.header as usize];
@@ -209,7 +179,7 @@ impl DdaRay {
 /// `⌊(p − min) / size⌋` clamped to `[0, last]`; 0 on a zero-extent axis (never divided by) and for
 /// a NaN quotient (`as` maps NaN to 0; the WGSL twin must test for it).
 #[inline(always)]
-fn guess_cell(p: f32, min: f32, size: f32, last: u32) -> u32 {
+fn start_cell(p: f32, min: f32, size: f32, last: u32) -> u32 {
     if size > 0.0 { ((p - min) / size).floor().clamp(0.0, last as f32) as u32 } else { 0 }
 }
 
