@@ -282,7 +282,7 @@ fn hand_built_two_and_three_level_grids_match_brute_force() {
 #[test]
 fn hand_built_grid_eight_levels_deep_matches_brute_force() {
     let tris = hand_triangles();
-    let grid = hand_grid(&tris, BOX_MIN, BOX_MAX, &deep_spec(kernels::cpu::grid::MAX_DEPTH as u32));
+    let grid = hand_grid(&tris, BOX_MIN, BOX_MAX, &deep_spec(structures::grid::MAX_DEPTH));
     assert_eq!(grid.headers.iter().map(|h| h.depth).max(), Some(8));
     check_hand_grid("eight levels", &grid, &scene_of("hand", &tris), 3);
 }

@@ -1,17 +1,12 @@
 //! CPU kernel of the reference BVH: ordered depth-first traversal with a short stack of
-//! `(node, entry t)` pairs, and a robust slab test (Ize, "Robust BVH Ray Traversal", JCGT 2013)
-//! so a ray grazing a box edge or face — the only way to reach a triangle edge lying on the box —
-//! is never culled. WGSL twin: (issue 5).
+//! `(node, entry t)` pairs, and the robust slab test of [`super::slab`]. WGSL twin: (issue 5).
 
 use scenes::Ray;
 use structures::bvh::{Bvh, BvhNode, MAX_DEPTH};
 
+use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
-
-/// `1 + 2·γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: scaling the far slab distance by it makes the
-/// f32 slab test conservative (Ize 2013, pbrt-v4 `Bounds3::IntersectP`).
-const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Boxes entered up to this factor beyond the best hit so far are still opened. A triangle hit
 /// at a grazing angle has an ill-conditioned `t` that may round below its own box's entry
@@ -20,39 +15,21 @@ const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f3
 /// measurable: only boxes starting within 0.012 % of the hit distance are affected.
 const CULL_MARGIN: f32 = 1.0 + 1.0 / 8192.0;
 
-/// A ray prepared for slab tests: reciprocal direction and, per axis, which box side is near.
+/// A ray prepared for slab tests against BVH nodes.
 struct SlabRay {
     origin: [f32; 3],
     inv: [f32; 3],
-    neg: [bool; 3],
 }
 
 impl SlabRay {
     fn new(ray: &Ray) -> Self {
-        // `+ 0.0` turns −0 into +0, so a zero component's reciprocal is +inf and the near/far
-        // choice below stays consistent; (side − origin)·inf is then ±inf, or NaN exactly on the
-        // side plane, and the NaN-ignoring comparisons in `entry` treat that as inside.
-        let inv = (ray.dir + 0.0).recip().to_array();
-        Self { origin: ray.origin.to_array(), inv, neg: inv.map(|v| v < 0.0) }
+        Self { origin: ray.origin.to_array(), inv: slab::reciprocal(ray.dir) }
     }
 
     /// Entry distance of the ray into `node`'s box within `(t_min, t_max)`, if it enters.
     #[inline(always)]
     fn entry(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
-        let (mut t0, mut t1) = (t_min, t_max);
-        for a in 0..3 {
-            let (near, far) = if self.neg[a] { (node.max[a], node.min[a]) } else { (node.min[a], node.max[a]) };
-            let tn = (near - self.origin[a]) * self.inv[a];
-            let tf = (far - self.origin[a]) * self.inv[a] * ROBUST_FAR;
-            // Written so that a NaN never replaces a bound (comparisons with NaN are false).
-            if tn > t0 {
-                t0 = tn;
-            }
-            if tf < t1 {
-                t1 = tf;
-            }
-        }
-        (t0 <= t1).then_some(t0)
+        slab::entry(&self.origin, &self.inv, &node.min, &node.max, t_min, t_max)
     }
 }
 

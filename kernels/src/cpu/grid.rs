@@ -29,17 +29,13 @@
 use scenes::Ray;
 use structures::grid::{Grid, GridHeader, SUBGRID_BIT};
 
+use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (DESIGN.md §4.5), the cap the
-/// builder enforces (`structures::grid` `build::MAX_DEPTH`). The stack holds the parents of the
-/// current level, so `MAX_DEPTH − 1` entries.
-pub const MAX_DEPTH: usize = 8;
-
-/// `1 + 2·γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: the far slab distance scaled by it makes the f32
-/// clip of the ray to the top grid's box conservative (Ize 2013), as in `cpu::bvh`.
-const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+/// builder enforces. The stack holds the parents of the current level, so `MAX_DEPTH − 1` entries.
+const MAX_DEPTH: usize = structures::grid::MAX_DEPTH as usize;
 
 /// Relative margin of the early exit. Triangles are tested over the whole `(t_min, best_t)`, not
 /// only over the current cell's span, so a hit found in a cell but lying beyond it is kept as a
@@ -47,9 +43,11 @@ const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f3
 /// `best_t + |best_t|·HIT_MARGIN < t_cell_out`. Any triangle listed only in later cells truly
 /// meets the ray at `t ≥ t_cell_out`, but its *computed* `t` can be smaller: the boundary `t` is
 /// off by ≲ 3 ulps, and the watertight test's `t` by far more at grazing angles. Without the margin
-/// a nearer-by-a-few-ulps triangle in the next cell would be skipped and the result would differ
-/// from brute force on the same triangle test. The same 1/8192 as `cpu::bvh`'s `CULL_MARGIN`; it
-/// costs one extra cell only when the hit lies within 0.012 % of the cell's exit.
+/// a nearer-by-a-few-ulps triangle in the next cell could be skipped and the result would differ
+/// from brute force on the same triangle test. (The builder's widened triangle lists usually list
+/// such a triangle in this cell too; the margin does not rely on it.) The same 1/8192 as
+/// `cpu::bvh`'s `CULL_MARGIN`; it costs one extra cell only when the hit lies within 0.012 % of the
+/// cell's exit.
 const HIT_MARGIN: f32 = 1.0 / 8192.0;
 
 /// The early-exit bound of a best hit at `t` (see [`HIT_MARGIN`]); `+inf` stays `+inf`.
@@ -89,7 +87,7 @@ impl DdaRay {
     fn new(ray: &Ray) -> Self {
         // `+ 0.0` turns −0 into +0, so a zero component's reciprocal is +inf, never −inf.
         let dir = (ray.dir + 0.0).to_array();
-        let inv = dir.map(f32::recip);
+        let inv = slab::reciprocal(ray.dir);
         let step = [0, 1, 2].map(|a| match inv[a] {
             i if !i.is_finite() => 0,
             i if i > 0.0 => 1,
@@ -101,19 +99,7 @@ impl DdaRay {
     /// The span `[t0, t1]` of the ray inside the box of `h`, within `(t_min, t_max)`: the robust
     /// slab test of `cpu::bvh` (NaN from `0·inf` on a box face never replaces a bound).
     fn clip(&self, h: &GridHeader, t_min: f32, t_max: f32) -> Option<f32> {
-        let (mut t0, mut t1) = (t_min, t_max);
-        for a in 0..3 {
-            let (near, far) = if self.inv[a] < 0.0 { (h.max[a], h.min[a]) } else { (h.min[a], h.max[a]) };
-            let tn = (near - self.origin[a]) * self.inv[a];
-            let tf = (far - self.origin[a]) * self.inv[a] * ROBUST_FAR;
-            if tn > t0 {
-                t0 = tn;
-            }
-            if tf < t1 {
-                t1 = tf;
-            }
-        }
-        (t0 <= t1).then_some(t0)
+        slab::entry(&self.origin, &self.inv, &h.min, &h.max, t_min, t_max)
     }
 
     /// `t` of the boundary plane `i` on a moving axis, by `GridHeader::boundary`'s arithmetic.

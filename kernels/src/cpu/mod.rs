@@ -5,4 +5,5 @@ pub mod brute_force;
 pub mod bvh;
 pub mod grid;
 pub mod render;
+pub mod slab;
 pub mod triangle;
