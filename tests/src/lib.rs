@@ -8,6 +8,30 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use scenes::{Camera, Ray, Scene, Triangle};
 
+/// One `#[test]` per built-in scene, named after it, calling `$check(name)`; plus a test that
+/// fails when a built-in scene is missing from the list (add it here).
+#[macro_export]
+macro_rules! per_builtin_scene {
+    ($check:ident) => {
+        $crate::per_builtin_scene!(@tests $check;
+            bunny => "bunny", teapot => "teapot", dragon_11k => "dragon-11k", dragon_48k => "dragon-48k",
+            dragon_203k => "dragon-203k", dragon => "dragon", grass_10k => "grass-10k", stadium => "stadium",
+            terrain => "terrain", menger => "menger", mandelbulb => "mandelbulb", city => "city",
+            flat => "flat", room => "room");
+    };
+    (@tests $check:ident; $($test:ident => $name:expr),*) => {
+        $( #[test] fn $test() { $check($name); } )*
+
+        #[test]
+        fn every_builtin_scene_is_covered() {
+            let listed = [$($name),*];
+            for name in scenes::BUILTIN_SCENES {
+                assert!(listed.contains(name), "built-in scene {name} has no test: add it to per_builtin_scene!");
+            }
+        }
+    };
+}
+
 /// A labelled test ray, so a failure says which kind of ray broke.
 #[derive(Clone, Copy, Debug)]
 pub struct TestRay {

@@ -30,34 +30,4 @@ fn check_scene(name: &str) {
     );
 }
 
-macro_rules! scene_tests {
-    ($($test:ident => $name:expr),* $(,)?) => {
-        $( #[test] fn $test() { check_scene($name); } )*
-    };
-}
-
-scene_tests! {
-    bunny => "bunny",
-    teapot => "teapot",
-    dragon_11k => "dragon-11k",
-    dragon_48k => "dragon-48k",
-    dragon_203k => "dragon-203k",
-    dragon => "dragon",
-    grass_10k => "grass-10k",
-    stadium => "stadium",
-    terrain => "terrain",
-    menger => "menger",
-    mandelbulb => "mandelbulb",
-    city => "city",
-    flat => "flat",
-    room => "room",
-}
-
-#[test]
-fn every_builtin_scene_is_covered() {
-    // A new built-in scene must be added to the list above.
-    let source = include_str!("bvh_vs_brute_force.rs");
-    for name in scenes::BUILTIN_SCENES {
-        assert!(source.contains(&format!("=> \"{name}\"")), "no BVH test for built-in scene {name}");
-    }
-}
+tests::per_builtin_scene!(check_scene);
