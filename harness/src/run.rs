@@ -205,8 +205,8 @@ fn measure_case(
                 workload.name(),
                 backend_name(backend)
             ));
-            let (stats, frame, heat) = timed_renders(accel.as_ref(), &camera, &shade, workload, plan);
-            let mut stats = stats;
+            let device = &out.results.machine.cpu;
+            let (mut stats, frame, heat) = timed_renders(accel.as_ref(), &camera, &shade, workload, plan, device);
             if workload == Workload::Primary {
                 bar.set_message(format!("{}/{structure}: checking against the reference", scene.name));
                 stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
@@ -252,6 +252,7 @@ fn timed_renders(
     shade: &ShadeContext,
     workload: Workload,
     plan: &Plan,
+    device: &str,
 ) -> (RenderStats, Frame, Vec<f32>) {
     let mut samples = Vec::new();
     let mut frame = None;
@@ -272,7 +273,7 @@ fn timed_renders(
     let heat: Vec<f32> = counted.pixels().map(|(x, y, _)| counters.at(&counted, x, y).steps as f32).collect();
     let stats = RenderStats {
         backend: "cpu".into(),
-        device: machine::machine().cpu,
+        device: device.to_string(),
         threads: plan.threads,
         width: camera.width,
         height: camera.height,
