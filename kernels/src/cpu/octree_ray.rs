@@ -1,0 +1,86 @@
+//! The ray set-up shared by every voxel kernel (seed 000 §6.1, "alternative coordinate system"):
+//! the octree occupies `[1, 2]³`, and the ray is mirrored on every axis where its direction is
+//! positive, so that in the mirrored frame every direction component is negative. The plane
+//! `x` of an axis is then crossed at `t = x·coef − bias`, one multiply and one subtract, with
+//! `coef < 0`: `t` *decreases* as `x` grows, and a cube `[x0, x0 + s]` is entered at its upper
+//! face and left at its lower face `x0`.
+//!
+//! Every voxel kernel (svo-naive, svo, esvo and the voxel DDA oracle) computes every plane
+//! distance through [`OctreeRay::plane_t`] from exactly-representable dyadic plane coordinates,
+//! so the same plane gives the same `t`, bit for bit, in all of them; that is what lets the tests
+//! demand exact agreement of hit voxel and `t` between different traversal algorithms.
+
+use glam::Vec3;
+use scenes::Ray;
+use structures::voxel::VoxelGrid;
+
+/// Direction components smaller than this (in octree units) are replaced by it, keeping its sign,
+/// so the coefficients stay finite (seed 000 Appendix A uses `exp2(-s_max)` with `s_max = 23`).
+pub const DIR_EPSILON: f32 = 1.0 / (1 << 23) as f32;
+
+/// The deepest scale the float-bit POP can resolve: 23 mantissa bits.
+pub const S_MAX: u32 = 23;
+
+#[derive(Clone, Copy, Debug)]
+pub struct OctreeRay {
+    /// `−1/|d|` per axis (all negative).
+    pub coef: Vec3,
+    /// Chosen so that `t = x·coef − bias` in the mirrored frame.
+    pub bias: Vec3,
+    /// Bit `a` set where axis `a` is mirrored (the world direction was positive). A mirrored-frame
+    /// child slot `idx` is the stored (world) slot `idx ^ mirror_mask`. The paper's `octant_mask`
+    /// is the complement of this because its slot numbering runs the other way; ours is "bit set
+    /// = upper half in world space", the Morton convention of `structures::voxel`.
+    pub mirror_mask: u32,
+}
+
+impl OctreeRay {
+    /// Sets up `ray` (in world space) against the voxel grid's cube.
+    pub fn new(grid: &VoxelGrid, ray: &Ray) -> Self {
+        Self::from_octree_space(&grid.to_octree_space(ray))
+    }
+
+    /// Sets up a ray already expressed in octree space (`[1, 2]³` is the cube).
+    pub fn from_octree_space(ray: &Ray) -> Self {
+        let mut coef = [0.0f32; 3];
+        let mut bias = [0.0f32; 3];
+        let mut mirror_mask = 0;
+        for a in 0..3 {
+            let mut d = ray.dir[a];
+            if d.abs() < DIR_EPSILON {
+                d = DIR_EPSILON.copysign(d);
+            }
+            coef[a] = 1.0 / -d.abs();
+            bias[a] = coef[a] * ray.origin[a];
+            if d > 0.0 {
+                mirror_mask |= 1 << a;
+                // World x ↦ mirrored 3 − x: t = (3 − x − o)/d = x·coef − (3·coef − coef·o).
+                bias[a] = 3.0 * coef[a] - bias[a];
+            }
+        }
+        Self { coef: Vec3::from(coef), bias: Vec3::from(bias), mirror_mask }
+    }
+
+    /// Distance to the planes at mirrored-frame coordinates `p` (per axis).
+    #[inline(always)]
+    pub fn plane_t(&self, p: Vec3) -> Vec3 {
+        p * self.coef - self.bias
+    }
+
+    /// The span `(entry, exit)` of the root cube `[1, 2]³`, clipped to `(t_min, t_max)`; empty if
+    /// `entry > exit`.
+    #[inline(always)]
+    pub fn root_span(&self, t_min: f32, t_max: f32) -> (f32, f32) {
+        let enter = self.plane_t(Vec3::splat(2.0));
+        let exit = self.plane_t(Vec3::ONE);
+        (enter.max_element().max(t_min), exit.min_element().min(t_max))
+    }
+}
+
+/// Position of the mirrored-frame point `p` (in `[1, 2]³`) back in octree (world-oriented)
+/// coordinates, per the mirror mask.
+#[inline]
+pub fn unmirror(p: Vec3, mirror_mask: u32) -> Vec3 {
+    let m = |a: usize| if mirror_mask >> a & 1 == 1 { 3.0 - p[a] } else { p[a] };
+    Vec3::new(m(0), m(1), m(2))
+}

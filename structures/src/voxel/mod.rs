@@ -1,0 +1,157 @@
+//! Conservative surface voxelisation, the input of every voxel structure (DESIGN.md §4.1).
+//!
+//! A scene is voxelised into a `2^L` grid over its bounding cube ([`VoxelGrid`]). Voxels are
+//! named by their Morton code ([`morton`]): three bits per level, x in the lowest bit of each
+//! triple, so the bits of one level are exactly the child slot index `idx` of the octree papers
+//! (seed 000 §6, Fig. 14: bit 0 = x, bit 1 = y, bit 2 = z). Sorting voxels by code is therefore
+//! the depth-first octree order, and a voxel's ancestors are its code shifted right by 3 per level.
+//!
+//! [`voxelize`] streams the voxels out by sub-cube in Morton order, so a consumer (the SVO
+//! builder) sees them globally sorted without ever holding more than a window of them.
+
+pub mod morton;
+pub mod octree;
+mod voxelize;
+
+#[cfg(test)]
+mod tests;
+
+use glam::{DVec3, Vec3};
+use scenes::{Aabb, Ray};
+
+pub use octree::{Octree, OctreeBuilder, OctreeLevel};
+pub use voxelize::{MAX_VOXELIZE_LEVEL, VoxelizeStats, triangle_overlaps_box, voxelize, voxelize_all};
+
+/// The deepest level a voxel code can address: 3·21 = 63 bits of a `u64`.
+pub const MAX_LEVEL: u32 = 21;
+
+/// The cube a voxel structure covers and its resolution `2^level` per axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelGrid {
+    /// Minimum corner of the cube, in world units.
+    pub origin: Vec3,
+    /// Side of the cube, in world units.
+    pub size: f32,
+    /// The grid has `2^level` voxels per axis.
+    pub level: u32,
+}
+
+impl VoxelGrid {
+    /// The bounding cube of `bounds` (centred on it, side = its largest extent, grown by a relative
+    /// 2^-12 so no vertex lies exactly on the cube's far faces), at resolution `2^level`.
+    pub fn fit(bounds: Aabb, level: u32) -> Self {
+        let extent = bounds.extent().max_element();
+        let size = if extent > 0.0 { extent * (1.0 + 1.0 / 4096.0) } else { 1.0 };
+        Self { origin: bounds.center() - Vec3::splat(size * 0.5), size, level }
+    }
+
+    /// Voxels per axis.
+    pub fn resolution(&self) -> u32 {
+        1 << self.level
+    }
+
+    /// Side of one voxel, in world units.
+    pub fn voxel_size(&self) -> f32 {
+        self.size / self.resolution() as f32
+    }
+
+    /// World-space box of the voxel at integer coordinates `c` (computed in f64, then rounded,
+    /// so neighbouring voxels share their faces exactly).
+    pub fn voxel_box(&self, c: [u32; 3]) -> Aabb {
+        let vs = self.size as f64 / self.resolution() as f64;
+        let o = self.origin.as_dvec3();
+        let lo = o + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * vs;
+        Aabb::new(lo.as_vec3(), (lo + DVec3::splat(vs)).as_vec3())
+    }
+
+    /// The ray expressed in the octree's unit space `[1, 2]³` (seed 000 §6.1: positions offset so
+    /// that the float bit patterns of coordinates encode the octree path). `t` is unchanged: the
+    /// direction is scaled by the same factor as the position, so a hit at `t` in octree space is
+    /// at `t` along the world ray too.
+    pub fn to_octree_space(&self, ray: &Ray) -> Ray {
+        let inv = 1.0 / self.size;
+        Ray::new((ray.origin - self.origin) * inv + Vec3::ONE, ray.dir * inv)
+    }
+}
+
+/// Per-voxel shading attributes (seed 000 §5.4): the averaged geometric normal and colour of the
+/// triangles overlapping the voxel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VoxelAttr {
+    /// Unit normal (area-weighted mean of the overlapping triangles' geometric normals), or zero
+    /// if they cancel out.
+    pub normal: Vec3,
+    /// Linear RGB in [0, 1] (mean vertex colour, or the constant default colour), alpha = coverage
+    /// is not modelled and stays 1.
+    pub color: Vec3,
+}
+
+/// The colour of voxels of a mesh without vertex colours.
+pub const DEFAULT_COLOR: Vec3 = Vec3::new(0.8, 0.8, 0.8);
+
+/// One streamed piece of a voxelisation: voxels of one sub-cube, sorted by Morton code.
+#[derive(Clone, Debug, Default)]
+pub struct VoxelChunk {
+    /// Morton codes at the grid's level, strictly increasing.
+    pub codes: Vec<u64>,
+    /// Attributes, parallel to `codes`.
+    pub attrs: Vec<VoxelAttr>,
+}
+
+/// A whole voxelisation in memory (small levels, tests, the DDA oracle).
+#[derive(Clone, Debug)]
+pub struct VoxelSet {
+    pub grid: VoxelGrid,
+    /// Morton codes, strictly increasing.
+    pub codes: Vec<u64>,
+    pub attrs: Vec<VoxelAttr>,
+}
+
+impl VoxelSet {
+    pub fn len(&self) -> usize {
+        self.codes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.codes.is_empty()
+    }
+
+    /// Index of the voxel at integer coordinates `c`, if it is set.
+    pub fn find(&self, c: [u32; 3]) -> Option<usize> {
+        self.codes.binary_search(&morton::encode(c)).ok()
+    }
+}
+
+/// The level of the sub-cubes [`voxelize`] streams: each sub-cube is at most `2^7` voxels per
+/// axis, so every octree node at a level `≥ subcube_level(L)` is complete within one chunk.
+pub fn subcube_level(level: u32) -> u32 {
+    level.saturating_sub(7)
+}
+
+/// The voxel level of a build: `voxel.levels` (the harness's `--levels L`), default 10.
+pub fn level_param(params: &crate::Params) -> Result<u32, crate::BuildError> {
+    let level = params.get("voxel.levels", 10u32)?;
+    if !(1..=MAX_LEVEL.min(16)).contains(&level) {
+        return Err(crate::BuildError::BadParam {
+            key: "voxel.levels".into(),
+            detail: format!("{level} is outside 1..=16 (2^16 voxels per axis is the most this build supports)"),
+        });
+    }
+    Ok(level)
+}
+
+/// Voxelises `scene` at `level` into an [`Octree`], streaming the voxeliser's chunks straight into
+/// the octree builder (DESIGN.md §4.1: bounded memory at high levels).
+pub fn build_octree(scene: &scenes::Scene, level: u32) -> (Octree, VoxelizeStats) {
+    let grid = VoxelGrid::fit(scene.bounds(), level);
+    let mut builder = OctreeBuilder::new(grid);
+    let stats = voxelize(scene, &grid, |chunk| {
+        builder.push_chunk(&chunk);
+        Ok::<(), std::convert::Infallible>(())
+    });
+    let stats = match stats {
+        Ok(s) => s,
+        Err(never) => match never {},
+    };
+    (builder.finish(), stats)
+}

@@ -1,0 +1,66 @@
+//! 3-D Morton codes, x in the lowest bit of each triple (seed 000 Fig. 14's child slot order).
+
+/// Spreads the low 21 bits of `v` so bit i lands on bit 3i.
+#[inline]
+pub fn spread(v: u32) -> u64 {
+    let mut x = (v as u64) & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// Inverse of [`spread`]: gathers bits 0, 3, 6, … of `x` into the low 21 bits.
+#[inline]
+pub fn compact(x: u64) -> u32 {
+    let mut x = x & 0x1249_2492_4924_9249;
+    x = (x | (x >> 2)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x >> 4)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x >> 8)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x >> 16)) & 0x001f_0000_0000_ffff;
+    x = (x | (x >> 32)) & 0x1f_ffff;
+    x as u32
+}
+
+/// The Morton code of integer voxel coordinates (each < 2^21).
+#[inline]
+pub fn encode(c: [u32; 3]) -> u64 {
+    spread(c[0]) | (spread(c[1]) << 1) | (spread(c[2]) << 2)
+}
+
+/// Integer voxel coordinates of a Morton code.
+#[inline]
+pub fn decode(code: u64) -> [u32; 3] {
+    [compact(code), compact(code >> 1), compact(code >> 2)]
+}
+
+/// The child slot index (0–7) of the voxel `code` inside its parent.
+#[inline]
+pub fn child_slot(code: u64) -> u32 {
+    (code & 7) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encode_decode_round_trip_and_bit_order() {
+        assert_eq!(encode([1, 0, 0]), 1);
+        assert_eq!(encode([0, 1, 0]), 2);
+        assert_eq!(encode([0, 0, 1]), 4);
+        assert_eq!(encode([2, 0, 0]), 8);
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..10_000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let c =
+                [(state >> 11) as u32 & 0x1f_ffff, (state >> 32) as u32 & 0x1f_ffff, (state >> 43) as u32 & 0x1f_ffff];
+            assert_eq!(decode(encode(c)), c);
+            // Morton order is the octree's depth-first order: comparing codes compares paths.
+            let parent = encode([c[0] >> 1, c[1] >> 1, c[2] >> 1]);
+            assert_eq!(encode(c) >> 3, parent);
+        }
+    }
+}
