@@ -1,0 +1,242 @@
+//! The stack-based octree ray caster of Laine & Karras (seed 000 §6, Fig. 15), generic over the
+//! node layout: ESVO's child descriptors (`esvo`) and the plain SVO's mask + first-child nodes
+//! (`svo`) run this same loop, so their differences are layout differences only.
+//!
+//! State, as in the paper: `parent` (the node holding the current voxel's slot), `idx` (the
+//! current child slot in the mirrored frame), `pos` (the current cube's minimum corner in the
+//! mirrored frame, `[1, 2]³`), `scale` (the cube is `2^(scale − S_MAX)` wide), the active span
+//! `[t_min, t_max]`, and `h`, the `t_max` above which a parent need not be pushed again. The
+//! stack holds `(parent, t_max)` indexed by scale.
+//!
+//! POP finds the new scale from the highest bit that differs between the float bit patterns of
+//! the old and the advanced position (§6, Fig. 14): in `[1, 2)` the mantissa bit `s` of a
+//! coordinate is the child-slot bit of the cube at scale `s`.
+
+use glam::Vec3;
+
+use super::octree_ray::{OctreeRay, S_MAX};
+use crate::Stats;
+
+/// What the caster needs from a node layout. Slots passed in are *world* child slots (bit set =
+/// upper half, x in bit 0); the caster mirrors them.
+pub trait CastNodes {
+    /// A handle to an interior node (the `parent` register).
+    type Node: Copy + Default;
+    /// The node's data the loop reads, fetched once and cached between ADVANCEs (§6.1,
+    /// "caching the current child descriptor").
+    type Desc: Copy;
+
+    fn root(&self) -> Self::Node;
+    fn fetch(&self, node: Self::Node) -> Self::Desc;
+    /// Whether child `slot` holds a voxel.
+    fn valid(&self, desc: &Self::Desc, slot: u32) -> bool;
+    /// Whether child `slot` (a valid voxel at `scale`) is a leaf.
+    fn leaf(&self, desc: &Self::Desc, slot: u32, scale: u32) -> bool;
+    /// The node of non-leaf child `slot`.
+    fn child(&self, node: Self::Node, desc: &Self::Desc, slot: u32) -> Self::Node;
+    /// The contour of child `slot`, if the layout has one for it.
+    #[inline(always)]
+    fn contour(&self, _node: Self::Node, _desc: &Self::Desc, _slot: u32) -> Option<u32> {
+        None
+    }
+}
+
+/// Per-cast switches beyond the ray.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CastOptions {
+    /// Intersect contours into the active span (§5.2–5.3).
+    pub contours: bool,
+    /// LOD termination (§6, line 11 of Fig. 15): stop at a voxel whose size is at most
+    /// `lod_k · t` (octree units; `lod_k` = pixel angle / cube size). 0 disables it.
+    pub lod_k: f32,
+}
+
+/// Where a cast ended.
+#[derive(Clone, Copy, Debug)]
+pub struct CastHit<N> {
+    pub t: f32,
+    /// The node holding the hit voxel's slot.
+    pub parent: N,
+    /// World child slot of the hit voxel in `parent`.
+    pub slot: u32,
+    /// The hit voxel's level (root = 0).
+    pub level: u32,
+    /// Integer coordinates of the hit voxel at its level, world-oriented.
+    pub coords: [u32; 3],
+    /// The hit voxel's cube in octree space (world-oriented): minimum corner and side.
+    pub cube_min: Vec3,
+    pub cube_size: f32,
+}
+
+/// Decodes a contour into the `t` span where the ray lies inside its slab.
+pub type ContourSpan = fn(contour: u32, cube_min: Vec3, cube_size: f32, ray: &scenes::Ray) -> (f32, f32);
+
+/// Casts `ray` (octree space) through `nodes`; see the module doc.
+#[inline(always)]
+pub fn cast<L: CastNodes, S: Stats>(
+    nodes: &L,
+    ray: &scenes::Ray,
+    r: &OctreeRay,
+    t_min: f32,
+    t_max: f32,
+    options: CastOptions,
+    contour_span: Option<ContourSpan>,
+    stats: &mut S,
+) -> Option<CastHit<L::Node>> {
+    let (mut t_min, mut t_max) = r.root_span(t_min, t_max);
+    if t_min > t_max {
+        return None;
+    }
+    let mut stack = [(L::Node::default(), 0.0f32); S_MAX as usize + 1];
+    let mut h = t_max;
+    let mut parent = nodes.root();
+    let mut desc: Option<L::Desc> = None;
+
+    // Select the root's child the ray enters first: the upper half of an axis iff the ray has
+    // not yet crossed its centre plane at t_min.
+    let mut idx = 0u32;
+    let mut pos = Vec3::ONE;
+    let mut scale = S_MAX - 1;
+    let mut scale_exp2 = 0.5f32;
+    let centre = r.plane_t(Vec3::splat(1.5));
+    for a in 0..3 {
+        if centre[a] > t_min {
+            idx ^= 1 << a;
+            pos[a] = 1.5;
+        }
+    }
+
+    loop {
+        stats.step();
+        let d = match desc {
+            Some(d) => d,
+            None => {
+                stats.visit();
+                let d = nodes.fetch(parent);
+                desc = Some(d);
+                d
+            }
+        };
+        // Distances to the current cube's exit planes (its lower faces in the mirrored frame).
+        let corner = r.plane_t(pos);
+        let tc_max = corner.min_element();
+        let slot = idx ^ r.mirror_mask;
+
+        if nodes.valid(&d, slot) && t_min <= t_max {
+            // LOD: the voxel is small enough for the pixel it covers.
+            if options.lod_k > 0.0 && scale_exp2 <= tc_max * options.lod_k {
+                return Some(CastHit::at(t_min, parent, slot, pos, scale, r.mirror_mask));
+            }
+            // INTERSECT: the span inside this cube, narrowed by the voxel's contour.
+            let mut tv_max = t_max.min(tc_max);
+            let half = scale_exp2 * 0.5;
+            let centre = r.plane_t(pos + Vec3::splat(half));
+            if options.contours
+                && let (Some(span_of), Some(contour)) = (contour_span, nodes.contour(parent, &d, slot))
+            {
+                stats.prim_test();
+                let (cube_min, size) = world_cube(pos, scale_exp2, r.mirror_mask);
+                let (lo, hi) = span_of(contour, cube_min, size, ray);
+                t_min = t_min.max(lo);
+                tv_max = tv_max.min(hi);
+            }
+            if t_min <= tv_max {
+                if nodes.leaf(&d, slot, scale) {
+                    return Some(CastHit::at(t_min, parent, slot, pos, scale, r.mirror_mask));
+                }
+                // PUSH
+                if tc_max < h {
+                    stack[scale as usize] = (parent, t_max);
+                    stats.push();
+                }
+                h = tc_max;
+                parent = nodes.child(parent, &d, slot);
+                desc = None;
+                idx = 0;
+                scale -= 1;
+                scale_exp2 = half;
+                for a in 0..3 {
+                    if centre[a] > t_min {
+                        idx ^= 1 << a;
+                        pos[a] += half;
+                    }
+                }
+                t_max = tv_max;
+                continue;
+            }
+        }
+
+        // ADVANCE: step to the next cube of the same scale through the exit plane(s).
+        let mut step_mask = 0u32;
+        for a in 0..3 {
+            if corner[a] <= tc_max {
+                step_mask ^= 1 << a;
+                pos[a] -= scale_exp2;
+            }
+        }
+        t_min = tc_max;
+        idx ^= step_mask;
+
+        // POP if a flipped bit went against the ray: the ray left the parent.
+        if idx & step_mask != 0 {
+            let mut differing = 0u32;
+            for a in 0..3 {
+                if step_mask >> a & 1 == 1 {
+                    differing |= pos[a].to_bits() ^ (pos[a] + scale_exp2).to_bits();
+                }
+            }
+            scale = 31 - differing.leading_zeros();
+            if scale >= S_MAX {
+                return None;
+            }
+            scale_exp2 = f32::from_bits((scale + 127 - S_MAX) << 23);
+            let (p, tm) = stack[scale as usize];
+            parent = p;
+            t_max = tm;
+            stats.pop();
+            idx = 0;
+            for a in 0..3 {
+                let sh = pos[a].to_bits() >> scale;
+                pos[a] = f32::from_bits(sh << scale);
+                idx |= (sh & 1) << a;
+            }
+            h = 0.0;
+            desc = None;
+        }
+    }
+}
+
+/// Integer coordinates at `level` of the mirrored-frame cube at `pos`, world-oriented.
+#[inline]
+fn coords(pos: Vec3, scale: u32, mirror_mask: u32) -> ([u32; 3], u32) {
+    let level = S_MAX - scale;
+    let mut c = [0u32; 3];
+    for a in 0..3 {
+        let k = (pos[a].to_bits() & 0x7f_ffff) >> scale;
+        c[a] = if mirror_mask >> a & 1 == 1 { (1 << level) - 1 - k } else { k };
+    }
+    (c, level)
+}
+
+/// The world-oriented octree-space cube (minimum corner, side) of the mirrored cube at `pos`.
+#[inline]
+pub fn world_cube(pos: Vec3, size: f32, mirror_mask: u32) -> (Vec3, f32) {
+    let mut lo = pos;
+    for a in 0..3 {
+        if mirror_mask >> a & 1 == 1 {
+            lo[a] = 3.0 - pos[a] - size;
+        }
+    }
+    (lo, size)
+}
+
+impl<N> CastHit<N> {
+    /// The hit on the mirrored-frame cube at `pos`, `scale`.
+    #[inline]
+    pub fn at(t: f32, parent: N, slot: u32, pos: Vec3, scale: u32, mirror_mask: u32) -> Self {
+        let size = f32::from_bits((scale + 127 - S_MAX) << 23);
+        let (coords, level) = coords(pos, scale, mirror_mask);
+        let (cube_min, cube_size) = world_cube(pos, size, mirror_mask);
+        CastHit { t, parent, slot, level, coords, cube_min, cube_size }
+    }
+}
