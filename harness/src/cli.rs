@@ -114,6 +114,20 @@ pub struct RunArgs {
     /// Untimed warm-up repetitions before the timed ones.
     #[arg(long)]
     pub warmup: Option<u32>,
+    /// Voxel structures (svo-naive, svo, esvo): resolution 2^L per axis (sets voxel.levels;
+    /// default 10, quick/ci presets 7).
+    #[arg(long, value_name = "L")]
+    pub levels: Option<u32>,
+    /// ESVO: fit, store and intersect contours (sets esvo.contours; default on).
+    #[arg(long, value_parser = ["on", "off"])]
+    pub contours: Option<String>,
+    /// ESVO: attribute attachment, raw (64-bit values via lookup entries) or compressed (DXT-like
+    /// blocks); sets esvo.attributes, default compressed.
+    #[arg(long, value_parser = ["raw", "compressed"])]
+    pub attributes: Option<String>,
+    /// ESVO: beam optimisation for primary rays (sets esvo.beam; default off).
+    #[arg(long, value_parser = ["on", "off"])]
+    pub beam: Option<String>,
     /// Structure parameter as key=value (repeatable), e.g. --param bvh.preset=fast.
     #[arg(long = "param", value_name = "KEY=VALUE")]
     pub params: Vec<String>,
@@ -182,7 +196,9 @@ impl Preset {
             Preset::OrgFig1 => &["ug.lambda=1", "org.max_depth=1"],
             // The paper caps RG at depth 2 on the dragon to keep it in memory (seed 002 §3).
             Preset::OrgFig2 | Preset::OrgTable1 => &["rg.max_depth=2"],
-            _ => &[],
+            // Small voxel resolutions keep the quick and CI matrices short.
+            Preset::Quick | Preset::Ci => &["voxel.levels=7"],
+            Preset::Default => &["voxel.levels=9"],
         }
     }
 
@@ -212,6 +228,22 @@ impl Preset {
 }
 
 impl RunArgs {
+    /// The voxel flags as parameters (after the preset's, before the user's `--param`).
+    fn voxel_flags(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(l) = self.levels {
+            out.push(format!("voxel.levels={l}"));
+        }
+        for (key, value) in
+            [("esvo.contours", &self.contours), ("esvo.attributes", &self.attributes), ("esvo.beam", &self.beam)]
+        {
+            if let Some(v) = value {
+                out.push(format!("{key}={v}"));
+            }
+        }
+        out
+    }
+
     pub fn plan(&self) -> Plan {
         let preset = self.preset.unwrap_or(Preset::Default);
         let (w, h) = preset.size();
@@ -239,7 +271,13 @@ impl RunArgs {
             threads: self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
-            params: preset.params().iter().map(|p| p.to_string()).chain(self.params.iter().cloned()).collect(),
+            params: preset
+                .params()
+                .iter()
+                .map(|p| p.to_string())
+                .chain(self.voxel_flags())
+                .chain(self.params.iter().cloned())
+                .collect(),
         }
     }
 }

@@ -3,6 +3,12 @@
 //! | structure | CPU kernel | WGSL kernel |
 //! |---|---|---|
 //! | `bvh` | [`cpu::bvh`] | (issue 5) |
+//! | `ug`, `rg`, `rg2`, `org` | [`cpu::grid`] | (issue 5) |
+//! | `svo-naive` | [`cpu::svo_naive`] | (issue 5) |
+//! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | (issue 5) |
+//! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | (issue 5) |
+//!
+//! The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle [`cpu::brute_force`].
 //!
 //! [`Traverse`] is the CPU side of a structure's contract (the build/memory side is
 //! `structures::Structure`); [`registry`] pairs each builder with its kernels by name;
@@ -13,7 +19,7 @@ pub mod registry;
 pub mod stats;
 
 use glam::Vec3;
-use scenes::Ray;
+use scenes::{Camera, Ray};
 
 pub use registry::{Accel, STRUCTURES, StructureEntry, build_structure, find_structure};
 pub use stats::{Counters, NoStats, Stats};
@@ -38,5 +44,11 @@ pub trait Traverse: Send + Sync {
     /// Whether anything lies on the ray in `(t_min, t_max)` (shadow and AO rays).
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.intersect(ray, t_min, t_max).is_some()
+    }
+    /// An optional per-frame pre-pass for primary rays: per pixel (row-major), a distance the
+    /// pixel's ray may start from (ESVO's beam optimisation, seed 000 §6.2). Its work is added to
+    /// `counters` when given. `None`: rays start at 0.
+    fn primary_starts(&self, _camera: &Camera, _counters: Option<&mut Counters>) -> Option<Vec<f32>> {
+        None
     }
 }

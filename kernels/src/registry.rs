@@ -49,6 +49,25 @@ pub static STRUCTURES: &[StructureEntry] = &[
         summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8)",
         build: |input| build_grid("org", input),
     },
+    StructureEntry {
+        name: "svo-naive",
+        family: "voxel",
+        summary: "seed 004's SVO: blocks of 8 i32 (0 empty, -1 leaf, else child block); --levels L",
+        build: |input| Ok(Box::new(structures::svo_naive::SvoNaive::build(input)?)),
+    },
+    StructureEntry {
+        name: "svo",
+        family: "voxel",
+        summary: "plain SVO (seed 001 §2.1): 8-bit masks + first-child pointer, breadth-first; --levels L",
+        build: |input| Ok(Box::new(structures::svo::Svo::build(input)?)),
+    },
+    StructureEntry {
+        name: "esvo",
+        family: "voxel",
+        summary: "Laine & Karras ESVO: child descriptors, far pointers, page headers, contours, attachments; \
+                  --levels L --contours on|off --attributes raw|compressed --beam on|off",
+        build: |input| Ok(Box::new(structures::esvo::Esvo::build(input)?)),
+    },
 ];
 
 fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {

@@ -13,6 +13,8 @@ pub trait Stats {
     fn prim_test(&mut self);
     fn push(&mut self);
     fn pop(&mut self);
+    /// Adds counts gathered elsewhere (a per-frame pre-pass).
+    fn add(&mut self, counters: &Counters);
 }
 
 /// Counts nothing; the timed path.
@@ -30,6 +32,8 @@ impl Stats for NoStats {
     fn push(&mut self) {}
     #[inline(always)]
     fn pop(&mut self) {}
+    #[inline(always)]
+    fn add(&mut self, _counters: &Counters) {}
 }
 
 /// The deterministic per-ray counts of DESIGN.md §3, summed over however many rays.
@@ -62,6 +66,10 @@ impl Stats for Counters {
     #[inline(always)]
     fn pop(&mut self) {
         self.pops += 1;
+    }
+    #[inline(always)]
+    fn add(&mut self, counters: &Counters) {
+        *self += *counters;
     }
 }
 

@@ -52,8 +52,14 @@ impl Camera {
     /// The primary ray through the centre of pixel (`x`, `y`); `y` grows downwards. The direction
     /// is normalised, so `t` is a distance.
     pub fn ray(&self, x: u32, y: u32) -> Ray {
-        let u = x as f32 + 0.5 - self.width as f32 * 0.5;
-        let v = y as f32 + 0.5 - self.height as f32 * 0.5;
+        self.ray_through(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// The primary ray through image position (`px`, `py`) in pixels from the top-left corner
+    /// (pixel centres are at `+0.5`; ESVO's beam pass casts through pixel corners).
+    pub fn ray_through(&self, px: f32, py: f32) -> Ray {
+        let u = px - self.width as f32 * 0.5;
+        let v = py - self.height as f32 * 0.5;
         let dir = self.forward + self.right_per_px * u + self.down_per_px * v;
         Ray::new(self.spec.eye, dir.normalize())
     }

@@ -11,9 +11,13 @@
 //! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
 
 pub mod bvh;
+pub mod esvo;
 pub mod grid;
 pub mod memory;
 pub mod params;
+pub mod svo;
+pub mod svo_naive;
+pub mod voxel;
 
 use std::sync::Arc;
 

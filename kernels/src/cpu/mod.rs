@@ -3,7 +3,13 @@
 
 pub mod brute_force;
 pub mod bvh;
+pub mod esvo;
 pub mod grid;
+pub mod octree_cast;
+pub mod octree_ray;
 pub mod render;
 pub mod slab;
+pub mod svo;
+pub mod svo_naive;
 pub mod triangle;
+pub mod voxel_dda;

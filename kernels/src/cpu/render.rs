@@ -168,6 +168,13 @@ fn render_tiles(
     let tiles_x = Frame::tiles_x(w);
     let tiles = (tiles_x * h.div_ceil(TILE)) as usize;
     let mut samples = vec![Sample::MISS; tiles * TILE_PIXELS];
+    let mut counters = counters;
+    let starts = match workload {
+        // The pre-pass's work is charged to the first pixel's counters (totals stay exact).
+        Workload::Primary => accel.primary_starts(camera, counters.as_deref_mut().and_then(|c| c.first_mut())),
+        _ => None,
+    };
+    let start = |x: u32, y: u32| starts.as_ref().map_or(0.0, |s| s[(y * w + x) as usize]);
     let tile_origin = |tile: usize| ((tile as u32 % tiles_x) * TILE, (tile as u32 / tiles_x) * TILE);
     match counters {
         None => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
@@ -175,7 +182,7 @@ fn render_tiles(
             for (i, s) in out.iter_mut().enumerate() {
                 let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
                 if x < w && y < h {
-                    *s = shade_pixel(accel, camera, ctx, workload, x, y, None);
+                    *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), None);
                 }
             }
         }),
@@ -186,7 +193,7 @@ fn render_tiles(
                     for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
                         let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
                         if x < w && y < h {
-                            *s = shade_pixel(accel, camera, ctx, workload, x, y, Some(c));
+                            *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), Some(c));
                         }
                     }
                 },
@@ -199,10 +206,16 @@ fn render_tiles(
 }
 
 #[inline]
-fn cast(accel: &dyn Traverse, ray: &Ray, t_max: f32, counters: &mut Option<&mut Counters>) -> Option<crate::Hit> {
+fn cast(
+    accel: &dyn Traverse,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    counters: &mut Option<&mut Counters>,
+) -> Option<crate::Hit> {
     match counters {
-        None => accel.intersect(ray, 0.0, t_max),
-        Some(c) => accel.intersect_counted(ray, 0.0, t_max, c),
+        None => accel.intersect(ray, t_min, t_max),
+        Some(c) => accel.intersect_counted(ray, t_min, t_max, c),
     }
 }
 
@@ -221,10 +234,11 @@ fn shade_pixel(
     workload: Workload,
     x: u32,
     y: u32,
+    t_start: f32,
     mut counters: Option<&mut Counters>,
 ) -> Sample {
     let ray = camera.ray(x, y);
-    let Some(hit) = cast(accel, &ray, f32::INFINITY, &mut counters) else {
+    let Some(hit) = cast(accel, &ray, t_start, f32::INFINITY, &mut counters) else {
         return Sample::MISS;
     };
     // Face the normal towards the viewer so secondary rays leave on the visible side.

@@ -1,0 +1,187 @@
+//! CPU kernel of ESVO (`structures::esvo`): the ray caster of seed 000 Fig. 15
+//! ([`super::octree_cast`]) over child descriptors — relative child pointers, far pointers,
+//! cooperating contours intersected into the active span — plus the attribute lookup of Fig. 8
+//! (page header → info section → attachment) and the beam optimisation of §6.2 for primary rays.
+//! WGSL twin: (issue 5).
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::{Camera, Ray};
+use structures::esvo::attributes::{CompressedBlock, decode_normal};
+use structures::esvo::contour::Contour;
+use structures::esvo::layout::*;
+use structures::esvo::{Attributes, Esvo};
+use structures::voxel::morton;
+
+use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
+use super::octree_ray::OctreeRay;
+use crate::{Counters, Hit, NoStats, Stats, Traverse};
+
+/// The descriptor array as the caster sees it.
+struct Descriptors<'a> {
+    words: &'a [u32],
+    root: u32,
+    contour_base: usize,
+}
+
+impl CastNodes for Descriptors<'_> {
+    type Node = u32;
+    type Desc = [u32; 2];
+
+    #[inline(always)]
+    fn root(&self) -> u32 {
+        self.root
+    }
+    #[inline(always)]
+    fn fetch(&self, node: u32) -> [u32; 2] {
+        let w = node as usize * 2;
+        [self.words[w], self.words[w + 1]]
+    }
+    #[inline(always)]
+    fn valid(&self, d: &[u32; 2], slot: u32) -> bool {
+        valid_mask(d[0]) >> slot & 1 == 1
+    }
+    #[inline(always)]
+    fn leaf(&self, d: &[u32; 2], slot: u32, _scale: u32) -> bool {
+        leaf_mask(d[0]) >> slot & 1 == 1
+    }
+    #[inline(always)]
+    fn child(&self, node: u32, d: &[u32; 2], slot: u32) -> u32 {
+        let mut offset = child_ptr(d[0]);
+        if is_far(d[0]) {
+            offset = self.words[(node + offset) as usize * 2];
+        }
+        node + offset + rank(valid_mask(d[0]) & !leaf_mask(d[0]), slot)
+    }
+    #[inline(always)]
+    fn contour(&self, _node: u32, d: &[u32; 2], slot: u32) -> Option<u32> {
+        let mask = contour_mask(d[1]);
+        (mask >> slot & 1 == 1).then(|| self.words[self.contour_base + (contour_ptr(d[1]) + rank(mask, slot)) as usize])
+    }
+}
+
+/// The `t` span in which the octree-space `ray` lies between the contour's two planes, for the
+/// voxel cube `[cube_min, cube_min + size]³` (seed 000 §5.2).
+fn contour_span(contour: u32, cube_min: Vec3, size: f32, ray: &Ray) -> (f32, f32) {
+    let (n, lo, hi) = Contour(contour).slab(cube_min, size);
+    let along = n.dot(ray.dir);
+    let at_origin = n.dot(ray.origin);
+    if along == 0.0 {
+        return if lo <= at_origin && at_origin <= hi { (f32::NEG_INFINITY, f32::INFINITY) } else { (1.0, 0.0) };
+    }
+    let inv = 1.0 / along;
+    let (t0, t1) = ((lo - at_origin) * inv, (hi - at_origin) * inv);
+    (t0.min(t1), t0.max(t1))
+}
+
+/// Casts a world-space ray; `lod_k` > 0 stops at voxels under that size per unit distance.
+fn cast_ray<S: Stats>(
+    esvo: &Esvo,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    contours: bool,
+    lod_k: f32,
+    stats: &mut S,
+) -> Option<CastHit<u32>> {
+    if esvo.is_empty() {
+        return None;
+    }
+    let oray = esvo.grid.to_octree_space(ray);
+    let r = OctreeRay::from_octree_space(&oray);
+    let options = CastOptions { contours: contours && esvo.params.contours, lod_k: lod_k / esvo.grid.size };
+    let nodes = Descriptors { words: &esvo.words, root: esvo.root_slot, contour_base: esvo.contour_word as usize };
+    cast(&nodes, &oray, &r, t_min, t_max, options, Some(contour_span), stats)
+}
+
+/// The normal of child `slot` of the descriptor at `desc_slot`, found as Fig. 8 does: the page
+/// header (clear the address's low bits) leads to the info section, whose directory leads to
+/// the attachment.
+pub fn attribute_normal(esvo: &Esvo, desc_slot: u32, slot: u32) -> Vec3 {
+    let w = &esvo.words;
+    let page_word = page_of(desc_slot as usize) * 2;
+    let info = page_word + w[page_word] as usize;
+    let block = (info as i64 + w[info] as i32 as i64) as usize;
+    let desc_index = desc_slot as usize - block / 2;
+    let attach = info + w[info + INFO_HEADER_WORDS + 1] as usize;
+    match esvo.attributes {
+        Attributes::Raw => {
+            let entry = w[attach + desc_index];
+            let mask = entry & 0xff;
+            if mask >> slot & 1 == 0 {
+                return Vec3::ZERO;
+            }
+            // Value pointers count 64-bit values from the end of the lookup array.
+            let lookups = (esvo.info_word / 2) as usize;
+            let value = (entry >> VALUE_PTR_SHIFT) + rank(mask, slot);
+            decode_normal(w[attach + lookups + value as usize * 2 + 1])
+        }
+        Attributes::Compressed => {
+            let b = attach + desc_index / 2 * COMPRESSED_BLOCK_WORDS;
+            let mut block = [0u32; COMPRESSED_BLOCK_WORDS];
+            block.copy_from_slice(&w[b..b + COMPRESSED_BLOCK_WORDS]);
+            CompressedBlock(block).normal((desc_index & 1) * 8 + slot as usize)
+        }
+    }
+}
+
+fn trace<S: Stats>(esvo: &Esvo, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    // LOD termination is in the caster (`lod_k`) and used by the beam pass; primary rays
+    // traverse to the leaves (`esvo.lod_pixels` is not wired to a camera yet).
+    let h = cast_ray(esvo, ray, t_min, t_max, true, 0.0, stats)?;
+    Some(Hit { t: h.t, normal: attribute_normal(esvo, h.parent, h.slot), prim: morton::encode(h.coords) })
+}
+
+/// The beam pre-pass (§6.2): rays through the corners of `block`×`block` pixel blocks, cubes
+/// only (contours off), stopping at voxels smaller than the beam at that distance; each
+/// block's rays may then start at the nearest corner distance minus a margin. A block with a
+/// corner ray that misses everything starts at 0: something small may still lie inside it.
+pub fn beam_starts<S: Stats>(esvo: &Esvo, camera: &Camera, stats: &mut S) -> Vec<f32> {
+    let b = esvo.params.beam_block;
+    let (w, h) = (camera.width, camera.height);
+    let (bw, bh) = (w.div_ceil(b), h.div_ceil(b));
+    let beam_k = b as f32 * camera.pixel_angle();
+    let corners: Vec<(f32, Counters)> = (0..(bw + 1) * (bh + 1))
+        .into_par_iter()
+        .map(|k| {
+            let (i, j) = (k % (bw + 1), k / (bw + 1));
+            let ray = camera.ray_through((i * b).min(w) as f32, (j * b).min(h) as f32);
+            let mut c = Counters::default();
+            let t = cast_ray(esvo, &ray, 0.0, f32::INFINITY, false, beam_k, &mut c).map_or(f32::INFINITY, |h| h.t);
+            (t, c)
+        })
+        .collect();
+    for (_, c) in &corners {
+        stats.add(c);
+    }
+    let voxel = esvo.grid.voxel_size();
+    let block_start: Vec<f32> = (0..bw * bh)
+        .map(|k| {
+            let (i, j) = ((k % bw) as usize, (k / bw) as usize);
+            let at = |di: usize, dj: usize| corners[(j + dj) * (bw as usize + 1) + i + di].0;
+            let t = at(0, 0).min(at(1, 0)).min(at(0, 1)).min(at(1, 1));
+            if t.is_finite() { (t - 2.0 * beam_k * t - 2.0 * voxel).max(0.0) } else { 0.0 }
+        })
+        .collect();
+    (0..w * h).map(|p| block_start[((p / w / b) * bw + (p % w) / b) as usize]).collect()
+}
+
+impl Traverse for Esvo {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, &mut NoStats)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn primary_starts(&self, camera: &Camera, counters: Option<&mut Counters>) -> Option<Vec<f32>> {
+        if !self.params.beam {
+            return None;
+        }
+        Some(match counters {
+            None => beam_starts(self, camera, &mut NoStats),
+            Some(c) => beam_starts(self, camera, c),
+        })
+    }
+}

@@ -1,0 +1,1283 @@
+//! ESVO shading attributes: pure encode/decode functions for colour and normal (seed 000 §5.4–5.5,
+//! DESIGN.md §4.3 "Attachments").
+//!
+//! - **Uncompressed** (§5.4, Fig. 7a/7b): 64 bits per voxel, a 32-bit ABGR colour
+//!   ([`encode_abgr`]) and a 32-bit normal stored as a point on the unit cube ([`encode_normal`]).
+//! - **Compressed** (§5.5, Fig. 9/10): one [`CompressedBlock`] of six words holds the colours and
+//!   normals of the 16 child slots of two sibling descriptors: a DXT1-like colour part and a 4×4
+//!   grid of candidate normals around a base normal.
+//!
+//! Where the attribute words live (lookup entries, attachment directory) is the builder's business;
+//! this module only turns values into words and back, the same way the CPU and WGSL shaders do.
+//!
+//! Measured errors (`cargo test -p structures esvo::attributes::tests::report_errors -- --nocapture`,
+//! fixed seeds):
+//!
+//! MEASURED_NUMBERS
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat3, Vec3};
+
+// ---------------------------------------------------------------------------------------------
+// Uncompressed colour (§5.4, Fig. 7a)
+// ---------------------------------------------------------------------------------------------
+
+/// Bits per channel of the ABGR colour (Fig. 7a: "standard ABGR encoding").
+pub const ABGR_CHANNEL_BITS: u32 = 8;
+/// Channel value that 1.0 maps to.
+pub const ABGR_CHANNEL_MAX: u32 = (1 << ABGR_CHANNEL_BITS) - 1;
+/// Red in bits 0..7.
+pub const ABGR_R_SHIFT: u32 = 0;
+/// Green in bits 8..15.
+pub const ABGR_G_SHIFT: u32 = 8;
+/// Blue in bits 16..23.
+pub const ABGR_B_SHIFT: u32 = 16;
+/// Alpha in bits 24..31; always [`ABGR_CHANNEL_MAX`] (voxels are opaque).
+pub const ABGR_A_SHIFT: u32 = 24;
+
+/// Encodes a linear RGB colour in [0, 1]³ as ABGR8 (Fig. 7a), alpha = 255. Channels are clamped
+/// to [0, 1] (NaN reads as 0) and rounded to the nearest of 256 levels.
+pub fn encode_abgr(color: Vec3) -> u32 {
+    let c = saturate(color);
+    let level = |x: f32| (x * ABGR_CHANNEL_MAX as f32).round() as u32;
+    ABGR_CHANNEL_MAX << ABGR_A_SHIFT
+        | level(c.z) << ABGR_B_SHIFT
+        | level(c.y) << ABGR_G_SHIFT
+        | level(c.x) << ABGR_R_SHIFT
+}
+
+/// Decodes an ABGR8 word (Fig. 7a) to linear RGB in [0, 1]³; alpha is ignored.
+pub fn decode_abgr(v: u32) -> Vec3 {
+    let channel = |shift: u32| field(v, shift, ABGR_CHANNEL_BITS) as f32 / ABGR_CHANNEL_MAX as f32;
+    Vec3::new(channel(ABGR_R_SHIFT), channel(ABGR_G_SHIFT), channel(ABGR_B_SHIFT))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Uncompressed normal (§5.4, Fig. 7b)
+// ---------------------------------------------------------------------------------------------
+//
+// The normal is the point p = n / max|n_i| on the unit cube. Its face is the major axis a and the
+// sign of n_a; the two in-face coordinates, along the tangent axes (a+1) mod 3 ("u") and
+// (a+2) mod 3 ("v"), are signed fixed-point numbers in [−1, 1] stored offset-binary
+// ("snorm": field q holds s = q − 2^(N−1), the coordinate is s / (2^(N−1) − 1)), so that 0 and
+// ±1 are exact and axis-aligned normals survive unchanged. Field value 0 reads as −1, like the
+// GPU's snorm formats; the encoder never writes it.
+
+/// Bits of the in-face coordinate along the first tangent axis (Fig. 7b: "one 15-bit").
+pub const NORMAL_U_BITS: u32 = 15;
+/// Bits of the in-face coordinate along the second tangent axis (Fig. 7b: "one 14-bit").
+pub const NORMAL_V_BITS: u32 = 14;
+/// The second tangent coordinate lies in bits 0..13.
+pub const NORMAL_V_SHIFT: u32 = 0;
+/// The first tangent coordinate lies in bits 14..28.
+pub const NORMAL_U_SHIFT: u32 = NORMAL_V_SHIFT + NORMAL_V_BITS;
+/// Bit 29, set when the face is on the negative side of its axis (Fig. 7b: "sign").
+pub const NORMAL_SIGN_BIT: u32 = 1 << (NORMAL_U_SHIFT + NORMAL_U_BITS);
+/// The face's axis (0 = x, 1 = y, 2 = z; Fig. 7b: "axis") lies in bits 30..31; 3 is never
+/// written and decodes as z.
+pub const NORMAL_AXIS_SHIFT: u32 = 30;
+/// Bits of the face axis.
+pub const NORMAL_AXIS_BITS: u32 = 2;
+
+const _: () = assert!(NORMAL_SIGN_BIT == 1 << 29 && NORMAL_AXIS_SHIFT + NORMAL_AXIS_BITS == 32);
+
+/// Encodes a normal as a point on the unit cube (Fig. 7b). `n` need not be unit length; a zero or
+/// non-finite vector encodes +Z. On a cube edge (a tie for the major axis) the lowest axis wins.
+/// Each in-face coordinate is rounded to the nearest representable value.
+pub fn encode_normal(n: Vec3) -> u32 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    if !n.is_finite() || a[axis] == 0.0 {
+        return encode_normal(Vec3::Z);
+    }
+    let p = n / a[axis];
+    let (u, v) = face_tangents(axis);
+    (axis as u32) << NORMAL_AXIS_SHIFT
+        | if n[axis] < 0.0 { NORMAL_SIGN_BIT } else { 0 }
+        | encode_snorm(p[u], NORMAL_U_BITS) << NORMAL_U_SHIFT
+        | encode_snorm(p[v], NORMAL_V_BITS) << NORMAL_V_SHIFT
+}
+
+/// Decodes a Fig. 7b normal to its point on the unit cube (not normalised): the major component
+/// is exactly ±1. The compressed scheme uses this point as its base normal `n_b` (Fig. 10).
+pub fn decode_normal_cube(v: u32) -> Vec3 {
+    let axis = normal_axis(v);
+    let (u, w) = face_tangents(axis);
+    let mut p = Vec3::ZERO;
+    p[axis] = if v & NORMAL_SIGN_BIT != 0 { -1.0 } else { 1.0 };
+    p[u] = decode_snorm(field(v, NORMAL_U_SHIFT, NORMAL_U_BITS), NORMAL_U_BITS);
+    p[w] = decode_snorm(field(v, NORMAL_V_SHIFT, NORMAL_V_BITS), NORMAL_V_BITS);
+    p
+}
+
+/// Decodes a Fig. 7b normal to a unit vector.
+pub fn decode_normal(v: u32) -> Vec3 {
+    // The major component is ±1, so the point is never zero.
+    decode_normal_cube(v).normalize()
+}
+
+/// The face axis of a Fig. 7b normal: 0 = x, 1 = y, 2 = z.
+pub fn normal_axis(v: u32) -> usize {
+    (field(v, NORMAL_AXIS_SHIFT, NORMAL_AXIS_BITS) as usize).min(2)
+}
+
+/// The two tangent axes of a cube face, in the order of the 15-bit and the 14-bit coordinate.
+fn face_tangents(axis: usize) -> (usize, usize) {
+    ((axis + 1) % 3, (axis + 2) % 3)
+}
+
+/// Largest magnitude of the signed integer in an N-bit snorm field: 1.0 is stored as this.
+const fn snorm_max(bits: u32) -> u32 {
+    (1 << (bits - 1)) - 1
+}
+
+/// A coordinate in [−1, 1] (clamped) to an N-bit offset-binary snorm field, rounded to nearest.
+fn encode_snorm(x: f32, bits: u32) -> u32 {
+    let max = snorm_max(bits) as f32;
+    let s = (x.clamp(-1.0, 1.0) * max).round() as i32;
+    (s + (1 << (bits - 1))) as u32
+}
+
+/// An N-bit offset-binary snorm field to its coordinate in [−1, 1].
+fn decode_snorm(q: u32, bits: u32) -> f32 {
+    let s = q as i32 - (1 << (bits - 1));
+    (s as f32 / snorm_max(bits) as f32).max(-1.0)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Compressed block layout (§5.5, Fig. 9)
+// ---------------------------------------------------------------------------------------------
+
+/// Child slots per compressed block: the 8 slots of two sibling descriptors (§5.5).
+pub const BLOCK_SLOTS: usize = 16;
+/// 32-bit words per compressed block (Fig. 9).
+pub const BLOCK_WORDS: usize = 6;
+/// Word 0: colour endpoints, c0 in bits 0..15 and c1 in bits 16..31, RGB565 each.
+pub const COLOR_ENDPOINTS_WORD: usize = 0;
+/// Word 1: colour index of slot i in bits 2i..2i+1, selecting from [`color_palette`].
+pub const COLOR_INDEX_WORD: usize = 1;
+/// Word 2: base normal `n_b`, cube-encoded exactly as an uncompressed normal (Fig. 7b).
+pub const NORMAL_BASE_WORD: usize = 2;
+/// Word 3: axis vectors, `n_u` in bits 0..15 and `n_v` in bits 16..31 (see [`decode_axis_vector`]).
+pub const NORMAL_AXES_WORD: usize = 3;
+/// Word 4: `c_u` index of slot i in bits 2i..2i+1, selecting from [`GRID_COEFFICIENTS`].
+pub const NORMAL_U_INDEX_WORD: usize = 4;
+/// Word 5: `c_v` index of slot i in bits 2i..2i+1, selecting from [`GRID_COEFFICIENTS`].
+pub const NORMAL_V_INDEX_WORD: usize = 5;
+/// Bits per slot in the index words 1, 4 and 5.
+pub const SLOT_INDEX_BITS: u32 = 2;
+/// Shift of the second 16-bit half of words 0 and 3 (c1, `n_v`).
+pub const HALF_WORD_SHIFT: u32 = 16;
+
+/// RGB565 blue in bits 0..4 (DXT1 order).
+pub const RGB565_B_SHIFT: u32 = 0;
+/// RGB565 blue and red bits.
+pub const RGB565_RB_BITS: u32 = 5;
+/// RGB565 green in bits 5..10.
+pub const RGB565_G_SHIFT: u32 = 5;
+/// RGB565 green bits.
+pub const RGB565_G_BITS: u32 = 6;
+/// RGB565 red in bits 11..15.
+pub const RGB565_R_SHIFT: u32 = 11;
+
+/// Bits of each signed (two's complement) component of an axis vector (§5.5: "three signed 4-bit
+/// integers"); x in bits 0..3, y in 4..7, z in 8..11 of the 16-bit half.
+pub const AXIS_COMPONENT_BITS: u32 = 4;
+/// The shared exponent of an axis vector lies in bits 12..15 of its 16-bit half.
+pub const AXIS_EXP_SHIFT: u32 = 12;
+/// Bits of the shared exponent.
+pub const AXIS_EXP_BITS: u32 = 4;
+/// Exponent bias: component = int · 2^(exp − 16), so the scale runs from 2^−16 to 2^−1 and an
+/// axis spans from 2^−16 (one step at 2^−14 length keeps 2 bits) up to 3.5 per component (8 · 2^−1
+/// on the negative side): residuals of 14-bit-precise smooth patches up to normals on opposite
+/// cube faces (|Δ| ≤ 2) fit (§5.5: "up to 14 bits" for smoothly varying normals).
+pub const AXIS_EXP_BIAS: i32 = 16;
+/// The grid coefficients `c_u`, `c_v` selected by a 2-bit index (§5.5: a linear 4×4 grid), in
+/// index order: evenly spaced, so the grid is uniform between `n_b ± n_u ± n_v`.
+pub const GRID_COEFFICIENTS: [f32; 4] = [-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0];
+
+const AXIS_INT_MIN: i32 = -(1 << (AXIS_COMPONENT_BITS - 1));
+const AXIS_INT_MAX: i32 = (1 << (AXIS_COMPONENT_BITS - 1)) - 1;
+const AXIS_EXP_MAX: u32 = (1 << AXIS_EXP_BITS) - 1;
+
+/// A compressed block of colours and normals for 16 child slots (§5.5, Fig. 9); the words are
+/// exactly those the kernels read (24 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct CompressedBlock(pub [u32; BLOCK_WORDS]);
+
+const _: () = assert!(size_of::<CompressedBlock>() == 24);
+
+impl CompressedBlock {
+    /// The colour of `slot` (< 16): one of the four palette entries (§5.5 "colours").
+    pub fn color(&self, slot: usize) -> Vec3 {
+        color_palette(self.0[COLOR_ENDPOINTS_WORD])[self.color_index(slot)]
+    }
+
+    /// The unit normal of `slot` (< 16): `normalise(n_b + c_u·n_u + c_v·n_v)` (Fig. 10).
+    pub fn normal(&self, slot: usize) -> Vec3 {
+        let (iu, iv) = self.normal_indices(slot);
+        NormalGrid::from_block(self).candidate(iu, iv)
+    }
+
+    /// The 2-bit colour index of `slot`.
+    pub fn color_index(&self, slot: usize) -> usize {
+        slot_index(self.0[COLOR_INDEX_WORD], slot)
+    }
+
+    /// The 2-bit `(c_u, c_v)` indices of `slot` into [`GRID_COEFFICIENTS`].
+    pub fn normal_indices(&self, slot: usize) -> (usize, usize) {
+        (slot_index(self.0[NORMAL_U_INDEX_WORD], slot), slot_index(self.0[NORMAL_V_INDEX_WORD], slot))
+    }
+}
+
+/// The four colours a block's endpoint word selects from: {c0, c1, (2c0 + c1)/3, (c0 + 2c1)/3}
+/// (§5.5, DXT1 without its transparent mode).
+pub fn color_palette(endpoints: u32) -> [Vec3; 4] {
+    let c0 = decode_rgb565(field(endpoints, 0, HALF_WORD_SHIFT));
+    let c1 = decode_rgb565(field(endpoints, HALF_WORD_SHIFT, HALF_WORD_SHIFT));
+    [c0, c1, (2.0 * c0 + c1) / 3.0, (c0 + 2.0 * c1) / 3.0]
+}
+
+/// RGB in [0, 1]³ (clamped) to RGB565, each channel rounded to nearest.
+pub fn encode_rgb565(color: Vec3) -> u32 {
+    let c = saturate(color);
+    let level = |x: f32, bits: u32| (x * ((1 << bits) - 1) as f32).round() as u32;
+    level(c.x, RGB565_RB_BITS) << RGB565_R_SHIFT
+        | level(c.y, RGB565_G_BITS) << RGB565_G_SHIFT
+        | level(c.z, RGB565_RB_BITS) << RGB565_B_SHIFT
+}
+
+/// RGB565 (low 16 bits of `q`) to RGB in [0, 1]³.
+pub fn decode_rgb565(q: u32) -> Vec3 {
+    let channel = |shift: u32, bits: u32| field(q, shift, bits) as f32 / ((1 << bits) - 1) as f32;
+    Vec3::new(
+        channel(RGB565_R_SHIFT, RGB565_RB_BITS),
+        channel(RGB565_G_SHIFT, RGB565_G_BITS),
+        channel(RGB565_B_SHIFT, RGB565_RB_BITS),
+    )
+}
+
+/// Decodes a 16-bit axis vector (low bits of `q`): three signed 4-bit integers times
+/// 2^(exp − [`AXIS_EXP_BIAS`]) (§5.5: "a floating-point vector with a shared exponent").
+pub fn decode_axis_vector(q: u32) -> Vec3 {
+    let int = |i: u32| {
+        let raw = field(q, i * AXIS_COMPONENT_BITS, AXIS_COMPONENT_BITS) as i32;
+        // Sign-extend the 4-bit two's complement integer.
+        (raw << (32 - AXIS_COMPONENT_BITS) >> (32 - AXIS_COMPONENT_BITS)) as f32
+    };
+    let scale = exp2i(field(q, AXIS_EXP_SHIFT, AXIS_EXP_BITS) as i32 - AXIS_EXP_BIAS);
+    Vec3::new(int(0), int(1), int(2)) * scale
+}
+
+/// Encodes an axis vector with the smallest exponent whose 4-bit integers hold it (so the most
+/// precision), rounding each component to nearest. Because the grid coefficients are symmetric,
+/// `v` and `−v` describe the same grid; the one needing the smaller exponent is stored (−8 fits,
+/// +8 does not). Too long vectors saturate; zero, tiny and non-finite vectors encode zero.
+pub fn encode_axis_vector(v: Vec3) -> u32 {
+    if !v.is_finite() {
+        return 0;
+    }
+    for exp in 0..=AXIS_EXP_MAX {
+        let ints = (v / exp2i(exp as i32 - AXIS_EXP_BIAS)).round();
+        for ints in [ints, -ints] {
+            if ints.min_element() >= AXIS_INT_MIN as f32 && ints.max_element() <= AXIS_INT_MAX as f32 {
+                return pack_axis_vector(ints, exp);
+            }
+        }
+    }
+    let ints = (v / exp2i(AXIS_EXP_MAX as i32 - AXIS_EXP_BIAS)).round();
+    pack_axis_vector(ints.clamp(Vec3::splat(AXIS_INT_MIN as f32), Vec3::splat(AXIS_INT_MAX as f32)), AXIS_EXP_MAX)
+}
+
+fn pack_axis_vector(ints: Vec3, exp: u32) -> u32 {
+    let mask = (1 << AXIS_COMPONENT_BITS) - 1;
+    let component = |x: f32, i: u32| ((x as i32) as u32 & mask) << (i * AXIS_COMPONENT_BITS);
+    component(ints.x, 0) | component(ints.y, 1) | component(ints.z, 2) | exp << AXIS_EXP_SHIFT
+}
+
+/// The decoded normal grid of Fig. 10: candidate (i, j) = normalise(n_b + c_i·n_u + c_j·n_v).
+#[derive(Clone, Copy, Debug)]
+struct NormalGrid {
+    base: Vec3,
+    u: Vec3,
+    v: Vec3,
+}
+
+impl NormalGrid {
+    fn from_words(base: u32, axes: u32) -> Self {
+        NormalGrid {
+            base: decode_normal_cube(base),
+            u: decode_axis_vector(field(axes, 0, HALF_WORD_SHIFT)),
+            v: decode_axis_vector(field(axes, HALF_WORD_SHIFT, HALF_WORD_SHIFT)),
+        }
+    }
+
+    fn from_block(block: &CompressedBlock) -> Self {
+        Self::from_words(block.0[NORMAL_BASE_WORD], block.0[NORMAL_AXES_WORD])
+    }
+
+    /// The unit candidate normal; a candidate that cancels to zero falls back to `n_b`.
+    fn candidate(&self, iu: usize, iv: usize) -> Vec3 {
+        let n = self.base + GRID_COEFFICIENTS[iu] * self.u + GRID_COEFFICIENTS[iv] * self.v;
+        n.try_normalize().unwrap_or_else(|| self.base.normalize())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Compression (§5.5): fitting the endpoints and the normal grid
+// ---------------------------------------------------------------------------------------------
+
+/// Power-iteration steps for the principal axes (3×3, so each step is a handful of flops).
+const POWER_ITERATIONS: usize = 6;
+/// Normals are projected onto the tangent plane of their mean when all lie within 60° of it;
+/// beyond, each goes onto its own cube face (see `project_normals`).
+const TANGENT_PLANE_MIN_COS: f32 = 0.5;
+/// For normals varying along one direction, `n_u` and `n_v` are stacked along it with lengths
+/// 0.8 : 0.2 of the half-extent, which spreads the 16 candidates evenly over it (§5.5: "same
+/// direction but different lengths").
+const STACKED_SHARES: (f32, f32) = (0.8, 0.2);
+/// Lloyd passes (assign, then least-squares refit) per initial grid, before quantisation.
+const LLOYD_PASSES: usize = 4;
+/// Lloyd passes after quantisation, against the true normals.
+const QUANTISED_PASSES: usize = 2;
+/// Pull of a refit towards the previous axis vectors, so a direction the indices do not
+/// constrain (all slots on one grid row) stays put instead of making the system singular.
+const REFIT_RIDGE: f32 = 1e-3;
+
+/// Compresses the colours and unit normals of 16 child slots (§5.5). `None` slots are empty:
+/// they are left out of the fit and decode to whatever the block gives them.
+pub fn compress_block(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> CompressedBlock {
+    let used = UsedSlots::gather(values);
+    let (endpoints, color_indices) = compress_colors(&used);
+    let (base, axes, u_indices, v_indices) = compress_normals(&used);
+    CompressedBlock([endpoints, color_indices, base, axes, u_indices, v_indices])
+}
+
+/// The non-empty slots of a block, packed to the front; allocation-free.
+struct UsedSlots {
+    count: usize,
+    slot: [usize; BLOCK_SLOTS],
+    color: [Vec3; BLOCK_SLOTS],
+    normal: [Vec3; BLOCK_SLOTS],
+}
+
+impl UsedSlots {
+    fn gather(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> Self {
+        let mut used = UsedSlots {
+            count: 0,
+            slot: [0; BLOCK_SLOTS],
+            color: [Vec3::ZERO; BLOCK_SLOTS],
+            normal: [Vec3::Z; BLOCK_SLOTS],
+        };
+        for (slot, value) in values.iter().enumerate() {
+            if let Some((color, normal)) = value {
+                used.slot[used.count] = slot;
+                used.color[used.count] = saturate(*color);
+                used.normal[used.count] = if normal.is_finite() { normal.normalize_or(Vec3::Z) } else { Vec3::Z };
+                used.count += 1;
+            }
+        }
+        used
+    }
+}
+
+/// Colour part (words 0–1): endpoints at the extremes of the used colours along their principal
+/// axis, or that range extended by half on one side (colours on only three of the four palette
+/// positions have an inner entry as an extreme); each slot takes its nearest palette entry, and
+/// a least-squares refit of the endpoints to those picks follows. The least squared error wins.
+fn compress_colors(used: &UsedSlots) -> (u32, u32) {
+    let colors = &used.color[..used.count];
+    if colors.is_empty() {
+        return (0, 0);
+    }
+    let mean = mean(colors);
+    let axis = principal_axis(covariance(colors, mean));
+    let (lo, hi) = extent(colors, mean, axis);
+    let half = 0.5 * (hi - lo);
+    let mut best = (0, 0, f32::INFINITY);
+    for (lo, hi) in [(lo, hi), (lo - half, hi), (lo, hi + half)] {
+        let endpoints = pack_endpoints(mean + lo * axis, mean + hi * axis);
+        let (indices, error) = assign_colors(endpoints, used);
+        if error < best.2 {
+            best = (endpoints, indices, error);
+        }
+        if let Some((c0, c1)) = refit_endpoints(indices, used) {
+            let refit = pack_endpoints(c0, c1);
+            let (indices, error) = assign_colors(refit, used);
+            if error < best.2 {
+                best = (refit, indices, error);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
+fn pack_endpoints(c0: Vec3, c1: Vec3) -> u32 {
+    encode_rgb565(c0) | encode_rgb565(c1) << HALF_WORD_SHIFT
+}
+
+/// Each used slot's nearest palette entry: the index word and the total squared error.
+fn assign_colors(endpoints: u32, used: &UsedSlots) -> (u32, f32) {
+    let palette = color_palette(endpoints);
+    let mut indices = 0;
+    let mut total = 0.0;
+    for (&slot, &color) in used.slot.iter().zip(&used.color).take(used.count) {
+        let (index, error) = nearest(&palette, color);
+        indices = with_slot_index(indices, slot, index);
+        total += error;
+    }
+    (indices, total)
+}
+
+/// Endpoints minimising the squared error for fixed indices: entry k is w_k·c0 + (1 − w_k)·c1.
+fn refit_endpoints(indices: u32, used: &UsedSlots) -> Option<(Vec3, Vec3)> {
+    const WEIGHT_OF_C0: [f32; 4] = [1.0, 0.0, 2.0 / 3.0, 1.0 / 3.0];
+    let (mut aa, mut ab, mut bb, mut ax, mut bx) = (0.0, 0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
+    for (&slot, &color) in used.slot.iter().zip(&used.color).take(used.count) {
+        let a = WEIGHT_OF_C0[slot_index(indices, slot)];
+        let b = 1.0 - a;
+        (aa, ab, bb) = (aa + a * a, ab + a * b, bb + b * b);
+        (ax, bx) = (ax + a * color, bx + b * color);
+    }
+    let det = aa * bb - ab * ab;
+    // Singular when every slot uses the same weight: the range fit is already as good.
+    (det > 1e-3).then(|| ((bb * ax - ab * bx) / det, (aa * bx - ab * ax) / det))
+}
+
+/// Normal part (words 2–5). The used normals become points `p_i` in a plane (`project_normals`),
+/// where a linear 4×4 grid is fitted to them: from each of a few initial grids
+/// (`initial_grids`), Lloyd passes alternate nearest-candidate picks with a least-squares refit
+/// of `n_b`, `n_u`, `n_v` to the picks. The best grid is quantised, every slot then picks the
+/// best of the 16 quantised candidates against its true normal, and a few more refits to those
+/// picks follow. Errors are sums of squared chord lengths (≈ Σ angle²).
+fn compress_normals(used: &UsedSlots) -> (u32, u32, u32, u32) {
+    if used.count == 0 {
+        return (encode_normal(Vec3::Z), 0, 0, 0);
+    }
+    let points = project_normals(used);
+    let points = &points[..used.count];
+    let mut best_fit: Option<(GridFit, f32)> = None;
+    for init in initial_grids(points) {
+        let (fit, _, error) = lloyd(points, init);
+        if best_fit.is_none_or(|(_, e)| error < e) {
+            best_fit = Some((fit, error));
+        }
+    }
+    let Some(mut best) = best_fit.and_then(|(fit, _)| quantise_grid(fit, used)) else {
+        // Only when the fit degenerated (normals cancelling out): store the first normal alone.
+        return (encode_normal(used.normal[0]), 0, 0, 0);
+    };
+    for _ in 0..QUANTISED_PASSES {
+        let Some(refit) = least_squares_grid(points, &best.picks, &best.fit) else { break };
+        match quantise_grid(refit, used) {
+            Some(grid) if grid.error < best.error => best = grid,
+            _ => break,
+        }
+    }
+    (best.base, best.axes, best.u_indices, best.v_indices)
+}
+
+/// A grid before quantisation, in the plane of the projected points `p_i`.
+#[derive(Clone, Copy, Debug)]
+struct GridFit {
+    centre: Vec3,
+    u: Vec3,
+    v: Vec3,
+}
+
+impl GridFit {
+    fn candidate(&self, pick: u8) -> Vec3 {
+        let (iu, iv) = split_pick(pick);
+        self.centre + GRID_COEFFICIENTS[iu] * self.u + GRID_COEFFICIENTS[iv] * self.v
+    }
+}
+
+/// A candidate pick `iu + 4·iv` as its (c_u, c_v) indices.
+fn split_pick(pick: u8) -> (usize, usize) {
+    (usize::from(pick % 4), usize::from(pick / 4))
+}
+
+/// A quantised grid with every used slot's best candidate.
+#[derive(Clone, Copy, Debug)]
+struct QuantisedGrid {
+    /// The grid it was quantised from.
+    fit: GridFit,
+    base: u32,
+    axes: u32,
+    u_indices: u32,
+    v_indices: u32,
+    /// Each used slot's pick, in used-slot order.
+    picks: [u8; BLOCK_SLOTS],
+    /// Σ |candidate − normal|² over the used slots.
+    error: f32,
+}
+
+/// Alternates nearest-candidate picks and least-squares refits in the plane while the error
+/// drops; returns the fit, its picks and its error.
+fn lloyd(points: &[Vec3], init: GridFit) -> (GridFit, [u8; BLOCK_SLOTS], f32) {
+    let mut fit = init;
+    let (mut picks, mut error) = pick_in_plane(points, &fit);
+    for _ in 0..LLOYD_PASSES {
+        let Some(refit) = least_squares_grid(points, &picks, &fit) else { break };
+        let (refit_picks, refit_error) = pick_in_plane(points, &refit);
+        if refit_error >= error {
+            break;
+        }
+        (fit, picks, error) = (refit, refit_picks, refit_error);
+    }
+    (fit, picks, error)
+}
+
+/// Each point's (nearly) nearest unquantised candidate and the total squared distance. The
+/// point's continuous grid coordinates (α, β) with p ≈ centre + α·u + β·v are rounded to the
+/// nearest coefficients: exact for a rectangular grid, close for a skewed one, and far cheaper
+/// than trying all 16. When u and v are (nearly) parallel, as in the stacked grid, the
+/// coordinates are not unique and all 16 candidates are tried.
+fn pick_in_plane(points: &[Vec3], fit: &GridFit) -> ([u8; BLOCK_SLOTS], f32) {
+    let (uu, uv, vv) = (fit.u.dot(fit.u), fit.u.dot(fit.v), fit.v.dot(fit.v));
+    let det = uu * vv - uv * uv;
+    let mut picks = [0; BLOCK_SLOTS];
+    let mut total = 0.0;
+    if det > 1e-4 * uu * vv {
+        for (pick, &p) in picks.iter_mut().zip(points) {
+            let r = p - fit.centre;
+            let (ur, vr) = (fit.u.dot(r), fit.v.dot(r));
+            let (alpha, beta) = ((vv * ur - uv * vr) / det, (uu * vr - uv * ur) / det);
+            *pick = (nearest_coefficient(alpha) + 4 * nearest_coefficient(beta)) as u8;
+            total += fit.candidate(*pick).distance_squared(p);
+        }
+    } else {
+        let mut candidates = [Vec3::ZERO; BLOCK_SLOTS];
+        for (pick, c) in candidates.iter_mut().enumerate() {
+            *c = fit.candidate(pick as u8);
+        }
+        for (pick, p) in picks.iter_mut().zip(points) {
+            let (i, error) = nearest(&candidates, *p);
+            *pick = i as u8;
+            total += error;
+        }
+    }
+    (picks, total)
+}
+
+/// Index of the [`GRID_COEFFICIENTS`] entry nearest to `x` (they are −1 + 2i/3).
+fn nearest_coefficient(x: f32) -> usize {
+    ((x + 1.0) * 1.5).round().clamp(0.0, 3.0) as usize
+}
+
+/// Candidates are normalised, so scaling the whole grid changes nothing: it is scaled to put
+/// `n_b` on the unit cube, then `n_b`, `n_u` and `n_v` are quantised and each used slot takes the
+/// candidate closest to its true normal. None for a degenerate fit.
+fn quantise_grid(fit: GridFit, used: &UsedSlots) -> Option<QuantisedGrid> {
+    let k = fit.centre.abs().max_element();
+    if !(k > 1e-6) || !(fit.centre.is_finite() && fit.u.is_finite() && fit.v.is_finite()) {
+        return None;
+    }
+    let base = encode_normal(fit.centre / k);
+    let axes = encode_axis_vector(fit.u / k) | encode_axis_vector(fit.v / k) << HALF_WORD_SHIFT;
+    let grid = NormalGrid::from_words(base, axes);
+    let mut candidates = [Vec3::ZERO; BLOCK_SLOTS];
+    for (pick, c) in candidates.iter_mut().enumerate() {
+        let (iu, iv) = split_pick(pick as u8);
+        *c = grid.candidate(iu, iv);
+    }
+    let mut q = QuantisedGrid { fit, base, axes, u_indices: 0, v_indices: 0, picks: [0; BLOCK_SLOTS], error: 0.0 };
+    for (i, (&slot, &normal)) in used.slot.iter().zip(&used.normal).take(used.count).enumerate() {
+        // Squared chord length, not 1 − dot: near-equal unit vectors differ by ~1e-4, whose
+        // squared chord f32 resolves while 1 − dot (≈ 1e-8) drowns in rounding.
+        let (pick, error) = nearest(&candidates, normal);
+        let (iu, iv) = split_pick(pick as u8);
+        q.picks[i] = pick as u8;
+        q.u_indices = with_slot_index(q.u_indices, slot, iu);
+        q.v_indices = with_slot_index(q.v_indices, slot, iv);
+        q.error += error;
+    }
+    Some(q)
+}
+
+/// The points the grid is fitted to. Candidates are normalised, so any positive multiple of a
+/// normal is that normal. When every used normal lies within 60° of their mean m, each is
+/// centrally projected onto the plane tangent to the unit sphere at m (p_i = n_i / (n_i · m)):
+/// a central projection maps great circles to straight lines, and centred on the patch it
+/// distorts least, so a smoothly varying patch stays nearly affine there, which is what a linear
+/// grid fits. Otherwise each normal goes to its own cube face (p = n / max|n_i|), as the
+/// cube encoding of Fig. 7b does.
+fn project_normals(used: &UsedSlots) -> [Vec3; BLOCK_SLOTS] {
+    let normals = &used.normal[..used.count];
+    let mean = normals.iter().sum::<Vec3>().try_normalize().unwrap_or(normals[0]);
+    let tangent = normals.iter().all(|n| n.dot(mean) >= TANGENT_PLANE_MIN_COS);
+    let mut points = [Vec3::ZERO; BLOCK_SLOTS];
+    for (p, n) in points.iter_mut().zip(normals) {
+        *p = if tangent { *n / n.dot(mean) } else { *n / n.abs().max_element() };
+    }
+    points
+}
+
+/// The first grids to try: the rectangle spanned by the extremes of the points along their two
+/// principal axes; both axes stacked along the first principal axis, which spreads 16
+/// candidates evenly over normals varying in one direction; and the parallelogram through four
+/// extreme points, which finds a skewed or near-isotropic lattice that neither box fits (the
+/// principal axes of a near-isotropic cloud are arbitrary).
+fn initial_grids(points: &[Vec3]) -> [GridFit; 3] {
+    let mean = mean(points);
+    let cov = covariance(points, mean);
+    let e1 = principal_axis(cov);
+    // The second axis: the principal axis of what is left once e1 is projected out.
+    let project_out = Mat3::IDENTITY - outer(e1, e1);
+    let e2 = principal_axis(project_out * cov * project_out);
+    let boxed = |a: Vec3, b: Vec3| {
+        let (a_lo, a_hi) = extent(points, mean, a);
+        let (b_lo, b_hi) = extent(points, mean, b);
+        GridFit {
+            centre: mean + 0.5 * (a_lo + a_hi) * a + 0.5 * (b_lo + b_hi) * b,
+            u: 0.5 * (a_hi - a_lo) * a,
+            v: 0.5 * (b_hi - b_lo) * b,
+        }
+    };
+    let principal = boxed(e1, e2);
+    let (share_u, share_v) = STACKED_SHARES;
+    let stacked = GridFit { centre: principal.centre, u: share_u * principal.u, v: share_v * principal.u };
+    [principal, stacked, parallelogram(points, mean)]
+}
+
+/// The parallelogram through four extreme points: A farthest from the mean, C farthest from A,
+/// B and D farthest from the line AC on either side; they become the grid corners
+/// `centre ± u ± v`, which recovers a skewed lattice exactly.
+fn parallelogram(points: &[Vec3], mean: Vec3) -> GridFit {
+    let farthest_from = |from: Vec3| {
+        points.iter().copied().max_by(|p, q| p.distance_squared(from).total_cmp(&q.distance_squared(from)))
+    };
+    let a = farthest_from(mean).unwrap_or(mean);
+    let c = farthest_from(a).unwrap_or(a);
+    let along = (c - a).normalize_or_zero();
+    let off_line = |p: Vec3| (p - a) - (p - a).dot(along) * along;
+    let longest = |x: &Vec3, y: &Vec3| x.length_squared().total_cmp(&y.length_squared());
+    let side = points.iter().map(|&p| off_line(p)).max_by(longest).unwrap_or(Vec3::ZERO).normalize_or_zero();
+    let by_side = |p: &Vec3, q: &Vec3| off_line(*p).dot(side).total_cmp(&off_line(*q).dot(side));
+    let b = points.iter().copied().max_by(by_side).unwrap_or(a);
+    let d = points.iter().copied().min_by(by_side).unwrap_or(a);
+    // With no point on the far side of AC, complete the parallelogram by reflecting B.
+    let d = if off_line(d).dot(side) < 0.0 { d } else { a + c - b };
+    GridFit { centre: 0.25 * (a + b + c + d), u: 0.25 * (c - a + b - d), v: 0.25 * (c - a - b + d) }
+}
+
+/// Least squares for fixed picks: minimise Σ |p_i − (centre + c_u,i·u + c_v,i·v)|² plus a
+/// small pull of u and v towards the previous fit (`REFIT_RIDGE`), which keeps the 3×3 system
+/// regular when the picks leave a direction unconstrained.
+fn least_squares_grid(points: &[Vec3], picks: &[u8; BLOCK_SLOTS], previous: &GridFit) -> Option<GridFit> {
+    let ridge = REFIT_RIDGE * points.len() as f32;
+    let mut normal_matrix = Mat3::from_diagonal(Vec3::new(0.0, ridge, ridge));
+    let mut rhs = [Vec3::ZERO, ridge * previous.u, ridge * previous.v];
+    for (&pick, &p) in picks.iter().zip(points) {
+        let (iu, iv) = split_pick(pick);
+        let (cu, cv) = (GRID_COEFFICIENTS[iu], GRID_COEFFICIENTS[iv]);
+        let row = Vec3::new(1.0, cu, cv);
+        normal_matrix += outer(row, row);
+        rhs = [rhs[0] + p, rhs[1] + cu * p, rhs[2] + cv * p];
+    }
+    if normal_matrix.determinant().abs() < 1e-9 {
+        return None;
+    }
+    // The inverse is symmetric, so its column j is also its row j.
+    let inverse = normal_matrix.inverse();
+    let solve = |row: Vec3| row.x * rhs[0] + row.y * rhs[1] + row.z * rhs[2];
+    Some(GridFit { centre: solve(inverse.x_axis), u: solve(inverse.y_axis), v: solve(inverse.z_axis) })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Small helpers
+// ---------------------------------------------------------------------------------------------
+
+/// Bits `shift..shift + bits` of `word`.
+fn field(word: u32, shift: u32, bits: u32) -> u32 {
+    (word >> shift) & ((1u32 << bits) - 1)
+}
+
+/// The 2-bit index of `slot` in an index word (words 1, 4, 5).
+fn slot_index(word: u32, slot: usize) -> usize {
+    field(word, SLOT_INDEX_BITS * slot as u32, SLOT_INDEX_BITS) as usize
+}
+
+fn with_slot_index(word: u32, slot: usize, index: usize) -> u32 {
+    let shift = SLOT_INDEX_BITS * slot as u32;
+    (word & !(((1 << SLOT_INDEX_BITS) - 1) << shift)) | (index as u32) << shift
+}
+
+/// 2^k for −126 ≤ k ≤ 127, exactly (ldexp on the GPU).
+fn exp2i(k: i32) -> f32 {
+    f32::from_bits(((k + 127) as u32) << 23)
+}
+
+/// Clamps to [0, 1]³, NaN to 0.
+fn saturate(c: Vec3) -> Vec3 {
+    let channel = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    Vec3::new(channel(c.x), channel(c.y), channel(c.z))
+}
+
+/// Index and squared distance of the entry of `set` nearest to `x` (first on ties).
+fn nearest(set: &[Vec3], x: Vec3) -> (usize, f32) {
+    let mut best = (0, f32::INFINITY);
+    for (i, c) in set.iter().enumerate() {
+        let d = c.distance_squared(x);
+        if d < best.1 {
+            best = (i, d);
+        }
+    }
+    best
+}
+
+fn mean(points: &[Vec3]) -> Vec3 {
+    points.iter().sum::<Vec3>() / points.len() as f32
+}
+
+fn outer(a: Vec3, b: Vec3) -> Mat3 {
+    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+fn covariance(points: &[Vec3], mean: Vec3) -> Mat3 {
+    points.iter().fold(Mat3::ZERO, |acc, p| acc + outer(*p - mean, *p - mean))
+}
+
+/// Unit eigenvector of the largest eigenvalue of a symmetric positive semi-definite matrix by
+/// power iteration from its longest column; zero for the zero matrix.
+fn principal_axis(m: Mat3) -> Vec3 {
+    let columns = [m.x_axis, m.y_axis, m.z_axis];
+    let start =
+        columns.into_iter().fold(Vec3::ZERO, |a, c| if c.length_squared() > a.length_squared() { c } else { a });
+    let Some(mut v) = start.try_normalize() else { return Vec3::ZERO };
+    for _ in 0..POWER_ITERATIONS {
+        match (m * v).try_normalize() {
+            Some(w) => v = w,
+            None => break,
+        }
+    }
+    v
+}
+
+/// Smallest and largest (p − origin) · axis over the points.
+fn extent(points: &[Vec3], origin: Vec3, axis: Vec3) -> (f32, f32) {
+    points
+        .iter()
+        .map(|p| (*p - origin).dot(axis))
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use glam::{DVec3, Quat};
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
+
+    const TRIALS: usize = 20_000;
+
+    /// Angle between two vectors in radians, in f64 and via atan2 so that tiny angles are exact
+    /// (acos of an f32 dot cannot resolve below ~3e-4 rad).
+    fn angle(a: Vec3, b: Vec3) -> f64 {
+        let (a, b): (DVec3, DVec3) = (a.as_dvec3(), b.as_dvec3());
+        a.cross(b).length().atan2(a.dot(b))
+    }
+
+    /// Worst angular error of an uncompressed normal: half a step in each in-face coordinate,
+    /// at the face centre where the cube is nearest the origin (elsewhere |p| > 1 shrinks the
+    /// angle), plus f32 rounding of decode and normalise.
+    fn uncompressed_normal_bound() -> f64 {
+        let half_u = 0.5 / snorm_max(NORMAL_U_BITS) as f64;
+        let half_v = 0.5 / snorm_max(NORMAL_V_BITS) as f64;
+        half_u.hypot(half_v) + 2e-7
+    }
+
+    fn random_unit(rng: &mut Pcg64Mcg) -> Vec3 {
+        loop {
+            let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            if (0.01..=1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        }
+    }
+
+    fn random_color(rng: &mut Pcg64Mcg) -> Vec3 {
+        Vec3::new(rng.random(), rng.random(), rng.random())
+    }
+
+    /// A unit vector within `radius` radians of `axis`.
+    fn random_within(rng: &mut Pcg64Mcg, axis: Vec3, radius: f32) -> Vec3 {
+        let tilt = Quat::from_axis_angle(axis.any_orthonormal_vector(), rng.random_range(0.0..radius));
+        let spin = Quat::from_axis_angle(axis, rng.random_range(0.0..std::f32::consts::TAU));
+        (spin * tilt * axis).normalize()
+    }
+
+    fn block_of(normals: &[Option<Vec3>; BLOCK_SLOTS]) -> [Option<(Vec3, Vec3)>; BLOCK_SLOTS] {
+        normals.map(|n| n.map(|n| (Vec3::splat(0.5), n)))
+    }
+
+    /// Largest angular error of the block's normals over its used slots.
+    fn max_normal_error(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS], block: &CompressedBlock) -> f64 {
+        values.iter().enumerate().filter_map(|(s, v)| v.map(|(_, n)| angle(block.normal(s), n))).fold(0.0, f64::max)
+    }
+
+    fn max_color_error(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS], block: &CompressedBlock) -> f32 {
+        values
+            .iter()
+            .enumerate()
+            .filter_map(|(s, v)| v.map(|(c, _)| (block.color(s) - c).abs().max_element()))
+            .fold(0.0, f32::max)
+    }
+
+    // ---- uncompressed colour ----
+
+    #[test]
+    fn abgr_round_trip_within_half_step() {
+        let mut rng = Pcg64Mcg::seed_from_u64(1);
+        for _ in 0..TRIALS {
+            let c = random_color(&mut rng);
+            let err = (decode_abgr(encode_abgr(c)) - c).abs().max_element();
+            assert!(err <= 0.5 / 255.0 + 1e-6, "{c} → error {err}");
+        }
+    }
+
+    #[test]
+    fn abgr_raw_round_trips_exactly() {
+        let mut rng = Pcg64Mcg::seed_from_u64(2);
+        let corners = [0xFF00_0000, 0xFFFF_FFFF, 0xFF01_02FE];
+        for v in corners.into_iter().chain((0..TRIALS).map(|_| rng.random::<u32>() | 0xFF00_0000)) {
+            assert_eq!(encode_abgr(decode_abgr(v)), v, "{v:#010x}");
+        }
+    }
+
+    #[test]
+    fn abgr_layout_clamps_and_is_opaque() {
+        assert_eq!(encode_abgr(Vec3::new(1.0, 0.0, 0.0)), 0xFF00_00FF, "red in the low byte");
+        assert_eq!(encode_abgr(Vec3::new(0.0, 0.0, 1.0)), 0xFFFF_0000, "blue in bits 16..23");
+        assert_eq!(encode_abgr(Vec3::new(2.0, -1.0, f32::NAN)), 0xFF00_00FF, "clamped, NaN as 0");
+        assert_eq!(encode_abgr(Vec3::splat(0.5 / 255.0)), 0xFF01_0101, "round half up to nearest");
+    }
+
+    // ---- uncompressed normal ----
+
+    /// A code the encoder never writes: a −1 alias in field 0, or a point on a cube edge shared
+    /// with a lower axis's face (the encoder breaks ties towards the lower axis).
+    fn is_alias(v: u32) -> bool {
+        let p = decode_normal_cube(v);
+        let axis = normal_axis(v);
+        field(v, NORMAL_U_SHIFT, NORMAL_U_BITS) == 0
+            || field(v, NORMAL_V_SHIFT, NORMAL_V_BITS) == 0
+            || (0..axis).any(|lower| p[lower].abs() == 1.0)
+    }
+
+    #[test]
+    fn normal_code_round_trips_exactly() {
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut aliases = 0;
+        let edges = [0u32, 1, snorm_max(NORMAL_V_BITS) * 2].map(|q| q << NORMAL_V_SHIFT | (1 << NORMAL_U_SHIFT));
+        let random =
+            (0..TRIALS).map(|_| (rng.random_range(0..3u32) << NORMAL_AXIS_SHIFT) | (rng.random::<u32>() & !(3 << 30)));
+        for v in edges.into_iter().chain(random) {
+            let p = decode_normal_cube(v);
+            let again = encode_normal(p);
+            if is_alias(v) {
+                // Another face's code for (nearly) the same point: the bit split of the face
+                // coordinates differs between faces, so only the direction is kept, to the bound.
+                aliases += 1;
+                assert!(angle(decode_normal_cube(again), p) <= uncompressed_normal_bound(), "{v:#010x}");
+            } else {
+                assert_eq!(again, v, "{v:#010x} → {p}");
+            }
+        }
+        assert!(aliases < 10, "the random codes should be almost all canonical ({aliases} aliases)");
+    }
+
+    #[test]
+    fn normal_angular_error_within_quantisation_bound() {
+        let mut rng = Pcg64Mcg::seed_from_u64(4);
+        let bound = uncompressed_normal_bound();
+        let mut worst: f64 = 0.0;
+        for _ in 0..TRIALS {
+            let n = random_unit(&mut rng);
+            // Scale must not matter: the encoder projects onto the cube.
+            let code = encode_normal(n * rng.random_range(0.1..10.0));
+            worst = worst.max(angle(decode_normal(code), n));
+        }
+        assert!(worst <= bound, "max error {worst:e} rad > bound {bound:e}");
+        assert!(worst > 0.5 * bound, "max error {worst:e} is suspiciously far below the bound {bound:e}");
+        assert!(bound < 2e-4);
+    }
+
+    #[test]
+    fn normal_precision_meets_the_papers_12_bits() {
+        // §5.4: "object-space normals need at least 12 bits of precision". Counting bits as
+        // −log2(worst angular error in radians), the quantisation bound alone gives ~13.8.
+        let mut rng = Pcg64Mcg::seed_from_u64(5);
+        let worst = (0..TRIALS)
+            .map(|_| random_unit(&mut rng))
+            .map(|n| angle(decode_normal(encode_normal(n)), n))
+            .fold(0.0, f64::max);
+        let bits = -worst.log2();
+        assert!(bits >= 12.0, "{bits:.2} bits");
+    }
+
+    #[test]
+    fn normal_axes_are_exact_and_degenerate_inputs_encode_plus_z() {
+        for axis in Vec3::AXES {
+            for n in [axis, -axis] {
+                assert_eq!(decode_normal(encode_normal(n)), n);
+            }
+        }
+        let plus_z = encode_normal(Vec3::Z);
+        assert_eq!(normal_axis(plus_z), 2);
+        assert_eq!(plus_z & NORMAL_SIGN_BIT, 0);
+        for n in [Vec3::ZERO, Vec3::NAN, Vec3::new(f32::INFINITY, 0.0, 1.0)] {
+            assert_eq!(encode_normal(n), plus_z, "{n}");
+        }
+        assert_eq!(normal_axis(encode_normal(Vec3::new(0.0, -3.0, 1.0))), 1);
+        assert_ne!(encode_normal(Vec3::new(0.0, -3.0, 1.0)) & NORMAL_SIGN_BIT, 0);
+    }
+
+    // ---- axis vectors ----
+
+    #[test]
+    fn axis_vector_uses_smallest_exponent_and_free_sign() {
+        // 7 · 2^−16 fits at exponent 0.
+        let v = Vec3::new(7.0, -3.0, 0.0) * exp2i(-AXIS_EXP_BIAS);
+        assert_eq!(decode_axis_vector(encode_axis_vector(v)), v);
+        assert_eq!(field(encode_axis_vector(v), AXIS_EXP_SHIFT, AXIS_EXP_BITS), 0);
+        // +8 does not fit a 4-bit integer but −8 does: stored negated at the same exponent.
+        let w = Vec3::new(8.0, 1.0, -2.0) * exp2i(-4);
+        assert_eq!(decode_axis_vector(encode_axis_vector(w)), -w);
+        // Lengths from ~2^−14 up to 2 per component keep at least 2 significant bits.
+        for length in [exp2i(-14), 1e-3, 0.1, 1.0, 2.0, 3.5] {
+            let v = Vec3::new(length, -0.3 * length, 0.6 * length);
+            let back = decode_axis_vector(encode_axis_vector(v));
+            let err = (back - v).length().min((back + v).length()) / length;
+            assert!(err < 0.15, "length {length}: relative error {err}");
+        }
+        assert_eq!(encode_axis_vector(Vec3::ZERO), 0);
+        assert_eq!(decode_axis_vector(0), Vec3::ZERO);
+    }
+
+    // ---- compressed colours ----
+
+    #[test]
+    fn compressed_colors_on_the_palette_line_within_rgb565_step() {
+        // Colours at the four palette positions between two endpoints: the only loss is the
+        // endpoints' RGB565 rounding, ≤ ½/31 per channel, carried into the interpolated ones.
+        let mut rng = Pcg64Mcg::seed_from_u64(6);
+        for _ in 0..2_000 {
+            let (a, b) = (random_color(&mut rng), random_color(&mut rng));
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|i| {
+                let t = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0][rng.random_range(0..4)];
+                (rng.random_bool(0.75) || i == 0).then_some((a.lerp(b, t), Vec3::Z))
+            });
+            let block = compress_block(&values);
+            let err = max_color_error(&values, &block);
+            assert!(err < 1.0 / 31.0, "{a} → {b}: error {err}");
+        }
+    }
+
+    #[test]
+    fn compressed_colors_on_a_segment_within_interpolation_bound() {
+        // Anywhere on the segment: at most half a palette step (|b − a| / 6) plus the RGB565 step.
+        let mut rng = Pcg64Mcg::seed_from_u64(7);
+        for _ in 0..2_000 {
+            let (a, b) = (random_color(&mut rng), random_color(&mut rng));
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|_| Some((a.lerp(b, rng.random()), Vec3::Z)));
+            let block = compress_block(&values);
+            let err = max_color_error(&values, &block);
+            let bound = (b - a).abs().max_element() / 6.0 + 1.0 / 31.0;
+            assert!(err < bound, "{a} → {b}: error {err} ≥ {bound}");
+        }
+    }
+
+    #[test]
+    fn compressed_random_colors_use_both_endpoints() {
+        let mut rng = Pcg64Mcg::seed_from_u64(8);
+        for _ in 0..2_000 {
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|_| Some((random_color(&mut rng), Vec3::Z)));
+            let block = compress_block(&values);
+            let err = max_color_error(&values, &block);
+            assert!(err.is_finite() && err < 0.75, "error {err}");
+            let indices: Vec<usize> = (0..BLOCK_SLOTS).map(|s| block.color_index(s)).collect();
+            assert!(indices.contains(&0) && indices.contains(&1), "endpoints unused: {indices:?}");
+            // Better than one flat colour for the block (the mean).
+            let mean = values.iter().flatten().map(|(c, _)| *c).sum::<Vec3>() / 16.0;
+            let sse = |f: &dyn Fn(usize) -> Vec3| -> f32 {
+                values.iter().enumerate().map(|(s, v)| v.map_or(0.0, |(c, _)| f(s).distance_squared(c))).sum()
+            };
+            assert!(sse(&|s| block.color(s)) < sse(&|_| mean));
+        }
+    }
+
+    #[test]
+    fn compressed_uniform_color_and_empty_block() {
+        let c = Vec3::new(0.2, 0.7, 0.9);
+        let values = [Some((c, Vec3::Y)); BLOCK_SLOTS];
+        let block = compress_block(&values);
+        let rgb565_half_step = Vec3::new(0.5 / 31.0, 0.5 / 63.0, 0.5 / 31.0) + 1e-6;
+        for s in 0..BLOCK_SLOTS {
+            assert!((block.color(s) - c).abs().cmple(rgb565_half_step).all(), "{}", block.color(s));
+        }
+        let empty = compress_block(&[None; BLOCK_SLOTS]);
+        assert_eq!(empty.normal(3), Vec3::Z);
+        assert_eq!(empty.color(15), Vec3::ZERO);
+    }
+
+    // ---- compressed normals ----
+
+    /// Normals of the 16 voxels (two sibling 2×2×2 groups side by side along x, on the integer
+    /// voxel grid) of a block straddling a sphere of radius `radius` voxels centred at the
+    /// origin: the voxels whose cube the sphere's surface passes through are used, each with the
+    /// sphere's normal at the surface point nearest its centre, as a voxeliser would give it.
+    pub fn sphere_block_pub(rng: &mut Pcg64Mcg, radius: f32) -> [Option<(Vec3, Vec3)>; BLOCK_SLOTS] { sphere_block(rng, radius) }
+    fn sphere_block(rng: &mut Pcg64Mcg, radius: f32) -> [Option<(Vec3, Vec3)>; BLOCK_SLOTS] {
+        loop {
+            let near_surface = random_unit(rng) * radius - Vec3::new(2.0, 1.0, 1.0) + random_unit(rng);
+            let corner = near_surface.floor();
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|slot| {
+                let (descriptor, child) = (slot / 8, slot % 8);
+                let cell =
+                    Vec3::new((2 * descriptor + (child & 1)) as f32, ((child >> 1) & 1) as f32, (child >> 2) as f32);
+                let (lo, hi) = (corner + cell, corner + cell + 1.0);
+                let nearest = Vec3::ZERO.clamp(lo, hi).length();
+                let farthest = lo.abs().max(hi.abs()).length();
+                (nearest <= radius && radius <= farthest).then(|| (Vec3::splat(0.5), (lo + 0.5).normalize()))
+            });
+            if values.iter().flatten().count() >= 2 {
+                return values;
+            }
+        }
+    }
+
+    /// Largest pairwise angle of the used normals.
+    fn spread(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> f64 {
+        let normals: Vec<Vec3> = values.iter().flatten().map(|(_, n)| *n).collect();
+        normals.iter().flat_map(|a| normals.iter().map(move |b| angle(*a, *b))).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn compressed_smooth_patch_normals_within_half_degree() {
+        // A sphere of radius 40 voxels: a block's normals span < 5° (checked). §5.5 promises
+        // "up to 14 bits" for smoothly varying normals; a 4×4 grid cannot hit every voxel of a
+        // staircase exactly, so the bound asserted is the measured worst case rounded up.
+        let mut rng = Pcg64Mcg::seed_from_u64(9);
+        let mut worst: f64 = 0.0;
+        for _ in 0..5_000 {
+            let values = sphere_block(&mut rng, 40.0);
+            assert!(spread(&values) < 5f64.to_radians());
+            worst = worst.max(max_normal_error(&values, &compress_block(&values)));
+        }
+        assert!(worst < 0.5f64.to_radians(), "max error {:.3}°", worst.to_degrees());
+    }
+
+    #[test]
+    fn compressed_parametric_patch_is_nearly_exact() {
+        // Normals that vary affinely over a 4×4 parameter grid (a smooth patch sampled evenly):
+        // the grid represents them up to the quantisation of n_b, n_u and n_v.
+        let mut rng = Pcg64Mcg::seed_from_u64(10);
+        let mut worst: f64 = 0.0;
+        for _ in 0..2_000 {
+            let centre = random_unit(&mut rng);
+            let t1 = centre.any_orthonormal_vector() * rng.random_range(0.0..0.04);
+            let t2 = centre.cross(t1).normalize_or_zero() * rng.random_range(0.0..0.04);
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|s| {
+                let (cu, cv) = (GRID_COEFFICIENTS[s % 4], GRID_COEFFICIENTS[s / 4]);
+                Some((Vec3::ONE, (centre + cu * t1 + cv * t2).normalize()))
+            });
+            let block = compress_block(&values);
+            let e = max_normal_error(&values, &block);
+            if e > 0.2f64.to_radians() {
+                println!(
+                    "err {:.3} centre {centre} t1 {t1} t2 {t2} base {} u {} v {}",
+                    e.to_degrees(),
+                    decode_normal_cube(block.0[2]),
+                    decode_axis_vector(block.0[3] & 0xffff),
+                    decode_axis_vector(block.0[3] >> 16)
+                );
+            }
+            worst = worst.max(e);
+        }
+        assert!(worst < 0.1f64.to_radians(), "max error {:.4}°", worst.to_degrees());
+    }
+
+    #[test]
+    fn compressed_identical_normals_keep_uncompressed_precision() {
+        let mut rng = Pcg64Mcg::seed_from_u64(11);
+        let bound = uncompressed_normal_bound();
+        for _ in 0..TRIALS / 4 {
+            let n = random_unit(&mut rng);
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|s| (s % 3 != 1).then_some((Vec3::ONE, n)));
+            let block = compress_block(&values);
+            assert_eq!(block.0[NORMAL_AXES_WORD] & 0x0FFF_0FFF, 0, "axes should be zero");
+            let err = max_normal_error(&values, &block);
+            assert!(err <= bound, "{n}: error {err:e} > {bound:e}");
+        }
+    }
+
+    #[test]
+    fn compressed_one_direction_normals_small_error() {
+        // Normals along one great-circle arc of up to 10°: the stacked axes give 16 evenly spaced
+        // candidates, so the error stays under half a step of arc / 15 (+ quantisation).
+        let mut rng = Pcg64Mcg::seed_from_u64(12);
+        let mut worst_ratio: f64 = 0.0;
+        for _ in 0..5_000 {
+            let start = random_unit(&mut rng);
+            let axis = start.any_orthonormal_vector();
+            let arc = rng.random_range(0.001..10f32.to_radians());
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|_| {
+                rng.random_bool(0.6)
+                    .then(|| (Vec3::ONE, Quat::from_axis_angle(axis, rng.random_range(0.0..arc)) * start))
+            });
+            if values.iter().flatten().count() == 0 {
+                continue;
+            }
+            let err = max_normal_error(&values, &compress_block(&values));
+            let bound = 0.5 * arc as f64 / 15.0 + 2.0 * uncompressed_normal_bound();
+            worst_ratio = worst_ratio.max(err / bound);
+        }
+        assert!(worst_ratio < 1.0, "error reaches {worst_ratio:.2} × the one-direction bound");
+    }
+
+    #[test]
+    fn compressed_empty_slots_are_ignored() {
+        // One used slot among 15 empty ones comes back within the uncompressed bound, whatever
+        // the slot, and nothing from the empty ones leaks into it.
+        let mut rng = Pcg64Mcg::seed_from_u64(13);
+        let bound = uncompressed_normal_bound();
+        for trial in 0..TRIALS / 4 {
+            let slot = trial % BLOCK_SLOTS;
+            let (c, n) = (random_color(&mut rng), random_unit(&mut rng));
+            let mut values = [None; BLOCK_SLOTS];
+            values[slot] = Some((c, n));
+            let block = compress_block(&values);
+            assert!(angle(block.normal(slot), n) <= bound, "slot {slot}: {n}");
+            let rgb565_half_step = Vec3::new(0.5 / 31.0, 0.5 / 63.0, 0.5 / 31.0) + 1e-6;
+            assert!((block.color(slot) - c).abs().cmple(rgb565_half_step).all(), "slot {slot}: {c}");
+        }
+    }
+
+    /// Prints the numbers quoted in the module documentation; asserts only that they are sane.
+    #[test]
+    fn report_errors() {
+        let mut rng = Pcg64Mcg::seed_from_u64(14);
+        let stats = |errors: &[f64]| {
+            (errors.iter().sum::<f64>() / errors.len() as f64, errors.iter().copied().fold(0.0, f64::max))
+        };
+        let per_slot = |values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS], block: &CompressedBlock| -> Vec<f64> {
+            values.iter().enumerate().filter_map(|(s, v)| v.map(|(_, n)| angle(block.normal(s), n))).collect()
+        };
+        let report = |name: &str, errors: &[f64]| {
+            let (mean, max) = stats(errors);
+            println!(
+                "{name}: mean {:.5}° max {:.5}° ({:.1} bits at max)",
+                mean.to_degrees(),
+                max.to_degrees(),
+                -max.log2()
+            );
+            assert!(max.is_finite());
+        };
+
+        let uncompressed: Vec<f64> =
+            (0..TRIALS).map(|_| random_unit(&mut rng)).map(|n| angle(decode_normal(encode_normal(n)), n)).collect();
+        report("uncompressed normal", &uncompressed);
+
+        let mut sphere = Vec::new();
+        let mut time = std::time::Duration::ZERO;
+        for _ in 0..5_000 {
+            let values = sphere_block(&mut rng, 40.0);
+            let start = std::time::Instant::now();
+            let block = compress_block(&values);
+            time += start.elapsed();
+            sphere.extend(per_slot(&values, &block));
+        }
+        report("compressed, sphere r=40 voxels (<5° spread)", &sphere);
+        println!("compress_block: {:.2} µs per block (sphere blocks)", time.as_secs_f64() * 1e6 / 5_000.0);
+
+        for radius in [400.0, 4_000.0] {
+            let errors: Vec<f64> = (0..2_000)
+                .flat_map(|_| {
+                    let values = sphere_block(&mut rng, radius);
+                    per_slot(&values, &compress_block(&values))
+                })
+                .collect();
+            report(&format!("compressed, sphere r={radius} voxels"), &errors);
+        }
+
+        for cone_deg in [0.1f32, 1.0, 2.5] {
+            let errors: Vec<f64> = (0..2_000)
+                .flat_map(|_| {
+                    let axis = random_unit(&mut rng);
+                    let values =
+                        block_of(&std::array::from_fn(|_| Some(random_within(&mut rng, axis, cone_deg.to_radians()))));
+                    per_slot(&values, &compress_block(&values))
+                })
+                .collect();
+            report(&format!("compressed, 16 random normals within {cone_deg}° of an axis"), &errors);
+        }
+
+        let errors: Vec<f64> = (0..2_000)
+            .flat_map(|_| {
+                let values = block_of(&std::array::from_fn(|_| Some(random_unit(&mut rng))));
+                per_slot(&values, &compress_block(&values))
+            })
+            .collect();
+        report("compressed, 16 random unit normals", &errors);
+
+        let mut color_errors = Vec::new();
+        for _ in 0..2_000 {
+            let values: [_; BLOCK_SLOTS] = std::array::from_fn(|_| Some((random_color(&mut rng), Vec3::Z)));
+            let block = compress_block(&values);
+            color_errors.extend(
+                (0..BLOCK_SLOTS)
+                    .map(|s| (block.color(s) - values[s].map_or(Vec3::ZERO, |v| v.0)).abs().max_element() as f64),
+            );
+        }
+        let (mean, max) = stats(&color_errors);
+        println!("compressed colour, 16 random colours: mean {mean:.4} max {max:.4} per channel");
+    }
+}
+#[cfg(test)]
+mod debug_tmp {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
+    #[test]
+    fn debug_sphere() {
+        let mut rng = Pcg64Mcg::seed_from_u64(9);
+        let mut worst = vec![];
+        for _ in 0..5000 {
+            let values = tests::sphere_block_pub(&mut rng, 40.0);
+            let block = compress_block(&values);
+            let e = (0..16).filter_map(|s| values[s].map(|(_, n)| (block.normal(s) - n).length())).fold(0.0, f32::max);
+            worst.push((e, values));
+        }
+        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        for (e, values) in worst.iter().take(8) {
+            let used = UsedSlots::gather(values);
+            let pts = project_normals(&used);
+            let pts = &pts[..used.count];
+            // ours in float
+            let mut ours = (f32::INFINITY, 0.0);
+            for init in initial_grids(pts) { let (f, p, err) = lloyd(pts, init); if err < ours.0 { let mx = pts.iter().zip(&p).map(|(q, &k)| f.candidate(k).distance(*q)).fold(0.0, f32::max); ours = (err, mx); } }
+            // brute force
+            let mut bf = (f32::INFINITY, 0.0);
+            let m = mean(pts);
+            let scale = pts.iter().map(|p| p.distance(m)).fold(0.0, f32::max);
+            for _ in 0..3000 {
+                let r = |rng: &mut Pcg64Mcg| Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale;
+                let n = m.normalize();
+                let proj = |v: Vec3| v - v.dot(n) * n;
+                let init = GridFit { centre: m + proj(r(&mut rng)) * 0.3, u: proj(r(&mut rng)), v: proj(r(&mut rng)) };
+                let (f, p, err) = lloyd(pts, init);
+                let mx = pts.iter().zip(&p).map(|(q, &k)| f.candidate(k).distance(*q)).fold(0.0, f32::max);
+                if mx < bf.1 || bf.0.is_infinite() { bf = (err, mx); }
+            }
+            println!("n {} quantised max {:.3}°  ours float sse {:.3e} max {:.3}°  brute best-max {:.3}° (sse {:.3e})", used.count, e.to_degrees(), ours.0, ours.1.to_degrees(), bf.1.to_degrees(), bf.0);
+        }
+    }
+}

@@ -1,0 +1,461 @@
+//! Builds ESVO's layout ([`super::layout`]) from the canonical voxel octree: contours fitted per
+//! voxel, descriptors emitted depth-first with far pointers where a 15-bit offset does not reach,
+//! page headers at every 8 KiB, the info section, contour data and one attribute attachment.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::Scene;
+
+use super::attributes::{CompressedBlock, compress_block, encode_abgr, encode_normal};
+use super::contour::{FitParams, fit};
+use super::layout::*;
+use super::{Attributes, Esvo, EsvoParams, EsvoStats};
+use crate::voxel::{self, Octree};
+
+/// Offsets predicted above this many slots get a far pointer. The prediction leaves out page
+/// headers and the padding before a run that would straddle a page (at most 17 slots per page
+/// crossed), so the margin keeps every near pointer within [`CHILD_PTR_MAX`].
+const FAR_THRESHOLD: u64 = CHILD_PTR_MAX as u64 - 600;
+
+pub fn build(scene: &Scene, params: EsvoParams) -> Esvo {
+    let (tree, voxelize) = voxel::build_octree(scene, params.level);
+    let t0 = Instant::now();
+    let contours = if params.contours { fit_contours(scene, &tree, params.contour_max_ratio) } else { Vec::new() };
+    let contour_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut esvo = Emitter::new(&tree, &contours, params.attributes).emit();
+    esvo.params = params;
+    esvo.voxelize = voxelize;
+    esvo.stats.contour_ms = contour_ms;
+    esvo
+}
+
+/// Per level (index = level, 1..=L; level 0 is empty), per voxel: its contour word, 0 = none.
+fn fit_contours(scene: &Scene, tree: &Octree, max_ratio: f32) -> Vec<Vec<u32>> {
+    let grid = tree.grid;
+    let levels = grid.level as usize;
+    let to_octree = |p: Vec3| (p - grid.origin) / grid.size + Vec3::ONE;
+    let triangles = scene.triangles();
+    if tree.is_empty() {
+        return vec![Vec::new(); levels + 1];
+    }
+    // Candidate (level, voxel, triangle) pairs: every set voxel whose cube meets the triangle's
+    // bounding box, found by descending the octree once per triangle. `fit` clips exactly.
+    let pairs: Vec<Vec<(u32, u32)>> = triangles
+        .par_iter()
+        .enumerate()
+        .fold(
+            || vec![Vec::new(); levels + 1],
+            |mut acc, (t, tri)| {
+                let p = tri.map(to_octree);
+                let lo = p[0].min(p[1]).min(p[2]);
+                let hi = p[0].max(p[1]).max(p[2]);
+                collect_pairs(tree, lo, hi, t as u32, &mut acc);
+                acc
+            },
+        )
+        .reduce(
+            || vec![Vec::new(); levels + 1],
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b) {
+                    x.extend(y);
+                }
+                a
+            },
+        );
+    let params = FitParams { max_ratio, ..FitParams::default() };
+    // Top-down, so each voxel knows the slab its ancestors already impose (cooperating contours,
+    // §5.3): the thickness, in octree units, of the nearest ancestor's contour (∞ at the root).
+    let mut contours: Vec<Vec<u32>> = vec![Vec::new()];
+    let mut inherited: Vec<f32> = vec![f32::INFINITY];
+    for (level, mut pairs) in pairs.into_iter().enumerate().skip(1) {
+        pairs.par_sort_unstable();
+        let n = tree.levels[level].len();
+        let side = (-(level as f32)).exp2();
+        let parent_inherited = expand_to_children(tree, level - 1, &inherited);
+        let mut starts: Vec<usize> = (0..pairs.len()).filter(|&k| k == 0 || pairs[k].0 != pairs[k - 1].0).collect();
+        starts.push(pairs.len());
+        let fitted: Vec<(u32, u32, f32)> = starts
+            .par_windows(2)
+            .filter_map(|w| {
+                let voxel = pairs[w[0]].0;
+                // "Store one only where it tightens the bound meaningfully": not where an
+                // ancestor's slab already pins the surface to a fraction of this voxel.
+                if parent_inherited[voxel as usize] <= INHERITED_ENOUGH * side {
+                    return None;
+                }
+                let tris: Vec<[Vec3; 3]> =
+                    pairs[w[0]..w[1]].iter().map(|&(_, t)| triangles[t as usize].map(to_octree)).collect();
+                let c = voxel_coords(tree, level, voxel as usize);
+                let lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
+                fit(&tris, lo, side, &params).map(|f| (voxel, f.contour.0, slab_thickness(f.contour, side)))
+            })
+            .collect();
+        let mut out = vec![0u32; n];
+        let mut inh = parent_inherited;
+        for (voxel, c, thickness) in fitted {
+            out[voxel as usize] = c;
+            inh[voxel as usize] = inh[voxel as usize].min(thickness);
+        }
+        contours.push(out);
+        inherited = inh;
+    }
+    contours
+}
+
+/// A voxel gets no contour if its ancestors' nearest contour is already at most this fraction of
+/// the voxel's side thick (octree units).
+const INHERITED_ENOUGH: f32 = 0.25;
+
+/// Thickness in octree units of a contour of a voxel of side `side`: `0.75·T / |n|` voxel sides.
+fn slab_thickness(c: super::contour::Contour, side: f32) -> f32 {
+    let n = c.normal();
+    let len = Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).length();
+    c.thickness() as f32 * 2.0 * super::contour::CHALF / len * side
+}
+
+/// Per voxel of `level + 1`, the value of its parent in `values` (per voxel of `level`).
+fn expand_to_children(tree: &Octree, level: usize, values: &[f32]) -> Vec<f32> {
+    let node = &tree.levels[level];
+    let mut out = vec![0.0; tree.levels[level + 1].len()];
+    for (i, (&mask, &first)) in node.masks.iter().zip(&node.first_child).enumerate() {
+        let first = first as usize;
+        out[first..first + mask.count_ones() as usize].fill(values[i]);
+    }
+    out
+}
+
+/// Integer coordinates of voxel `i` at `level`.
+fn voxel_coords(tree: &Octree, level: usize, i: usize) -> [u32; 3] {
+    if level < tree.levels.len() - 1 {
+        return voxel::morton::decode(tree.levels[level].codes[i]);
+    }
+    // Leaves carry no codes: find the parent by binary search over first_child.
+    let parents = &tree.levels[level - 1];
+    let p = parents.first_child.partition_point(|&f| f as usize <= i) - 1;
+    let mask = parents.masks[p] as u32;
+    let mut k = parents.first_child[p] as usize;
+    for slot in 0..8 {
+        if mask >> slot & 1 == 1 {
+            if k == i {
+                return voxel::morton::decode(tree.child_code(level - 1, p, slot));
+            }
+            k += 1;
+        }
+    }
+    unreachable!("leaf {i} is a child of its parent");
+}
+
+/// Descends from the root, recording every set voxel whose cube meets `[lo, hi]` (octree space).
+fn collect_pairs(tree: &Octree, lo: Vec3, hi: Vec3, tri: u32, out: &mut [Vec<(u32, u32)>]) {
+    let levels = tree.levels.len() - 1;
+    // (level, index, coords) of voxels to expand.
+    let mut stack: Vec<(usize, usize, [u32; 3])> = vec![(0, 0, [0; 3])];
+    while let Some((level, i, c)) = stack.pop() {
+        let mask = tree.levels[level].masks[i] as u32;
+        let mut child = tree.levels[level].first_child[i] as usize;
+        let side = (-((level + 1) as f32)).exp2();
+        for slot in 0..8u32 {
+            if mask >> slot & 1 == 0 {
+                continue;
+            }
+            let cc = [c[0] * 2 + (slot & 1), c[1] * 2 + (slot >> 1 & 1), c[2] * 2 + (slot >> 2 & 1)];
+            let cmin = Vec3::ONE + Vec3::new(cc[0] as f32, cc[1] as f32, cc[2] as f32) * side;
+            let cmax = cmin + Vec3::splat(side);
+            if cmin.cmple(hi).all() && cmax.cmpge(lo).all() {
+                out[level + 1].push((child as u32, tri));
+                if level + 1 < levels {
+                    stack.push((level + 1, child, cc));
+                }
+            }
+            child += 1;
+        }
+    }
+}
+
+/// What a slot of the descriptor array holds (for the memory breakdown).
+#[derive(Clone, Copy, PartialEq)]
+enum Slot {
+    Header,
+    Descriptor { level: u8, voxel: u32 },
+    Far,
+    Pad,
+}
+
+struct Emitter<'a> {
+    tree: &'a Octree,
+    contours: &'a [Vec<u32>],
+    attributes: Attributes,
+    /// Predicted slots emitted below each interior voxel (levels 0..L−1), excluding itself.
+    sub: Vec<Vec<u64>>,
+    slots: Vec<[u32; 2]>,
+    kinds: Vec<Slot>,
+    contour_data: Vec<u32>,
+    /// Raw attachment: lookup entry per slot, values (ABGR, normal) per voxel.
+    lookups: Vec<u32>,
+    values: Vec<u32>,
+    stats: EsvoStats,
+}
+
+impl<'a> Emitter<'a> {
+    fn new(tree: &'a Octree, contours: &'a [Vec<u32>], attributes: Attributes) -> Self {
+        let levels = tree.grid.level as usize;
+        let mut sub: Vec<Vec<u64>> = vec![Vec::new(); levels];
+        // Bottom-up: level L−1 voxels emit nothing below themselves (their children are leaves).
+        if levels > 0 {
+            sub[levels - 1] = vec![0; tree.levels[levels - 1].len()];
+        }
+        for l in (0..levels.saturating_sub(1)).rev() {
+            let level = &tree.levels[l];
+            sub[l] = (0..level.len())
+                .map(|i| {
+                    let first = level.first_child[i] as usize;
+                    let m = level.masks[i].count_ones() as usize;
+                    let subs = &sub[l + 1][first..first + m];
+                    let far = far_flags(subs).count_ones() as u64;
+                    m as u64 + far + subs.iter().sum::<u64>() + 1
+                })
+                .collect();
+        }
+        Self {
+            tree,
+            contours,
+            attributes,
+            sub,
+            slots: Vec::new(),
+            kinds: Vec::new(),
+            contour_data: Vec::new(),
+            lookups: Vec::new(),
+            values: Vec::new(),
+            stats: EsvoStats::default(),
+        }
+    }
+
+    /// Appends `n` contiguous slots, first inserting the page header where a page starts and
+    /// padding so the run neither straddles a page nor (compressed attributes) starts odd.
+    fn alloc(&mut self, n: usize) -> usize {
+        debug_assert!(n < PAGE_SLOTS / 2);
+        let even = self.attributes == Attributes::Compressed;
+        loop {
+            let s = self.slots.len();
+            if s % PAGE_SLOTS == 0 {
+                self.push(Slot::Header);
+            } else if even && s % 2 == 1 {
+                self.push(Slot::Pad);
+            } else if s / PAGE_SLOTS != (s + n - 1) / PAGE_SLOTS {
+                self.push(Slot::Pad);
+            } else {
+                for _ in 0..n {
+                    self.push(Slot::Pad);
+                }
+                return s;
+            }
+        }
+    }
+
+    fn push(&mut self, kind: Slot) {
+        self.slots.push([0, 0]);
+        self.kinds.push(kind);
+    }
+
+    fn emit(mut self) -> Esvo {
+        let mut root_slot = 0;
+        if !self.tree.is_empty() {
+            root_slot = self.alloc(1);
+            self.visit(0, 0, root_slot, None);
+        }
+        self.finish(root_slot)
+    }
+
+    /// Writes the descriptor of voxel `i` at `level` into `slot`, then lays out its children's.
+    /// `far` is the far-pointer slot the parent reserved for it, if its offset may not fit.
+    fn visit(&mut self, level: usize, i: usize, slot: usize, far: Option<usize>) {
+        let leaf_parent = level + 1 == self.tree.levels.len() - 1;
+        let node = &self.tree.levels[level];
+        let mask = node.masks[i] as u32;
+        let first = node.first_child[i] as usize;
+        let m = mask.count_ones() as usize;
+        self.kinds[slot] = Slot::Descriptor { level: level as u8, voxel: i as u32 };
+        self.stats.descriptors += 1;
+
+        // Second word: this voxel's children's contours, consecutive.
+        let mut contour_mask = 0;
+        let contour_ptr = self.contour_data.len() as u32;
+        if let Some(level_contours) = self.contours.get(level + 1).filter(|c| !c.is_empty()) {
+            for (k, s) in (0..8).filter(|s| mask >> s & 1 == 1).enumerate() {
+                let c = level_contours[first + k];
+                if c != 0 && contour_ptr <= CONTOUR_PTR_MAX {
+                    contour_mask |= 1 << s;
+                    self.contour_data.push(c);
+                }
+            }
+        }
+        self.slots[slot][1] = if contour_mask != 0 { (contour_ptr << CONTOUR_PTR_SHIFT) | contour_mask } else { 0 };
+
+        // Raw attachment: one value per valid child.
+        if self.attributes == Attributes::Raw {
+            let value_ptr = (self.values.len() / 2) as u32;
+            self.lookups.resize(self.slots.len().max(slot + 1), 0);
+            self.lookups[slot] = (value_ptr.min(VALUE_PTR_MAX) << VALUE_PTR_SHIFT) | mask;
+            for k in 0..m {
+                let a = self.tree.levels[level + 1].attrs[first + k];
+                self.values.push(encode_abgr(a.color));
+                self.values.push(encode_normal(a.normal));
+            }
+        }
+
+        if leaf_parent {
+            self.slots[slot][0] = descriptor_w0(0, false, mask, mask);
+            return;
+        }
+        let subs = &self.sub[level + 1][first..first + m];
+        let flags = far_flags(subs);
+        let f = flags.count_ones() as usize;
+        let group = self.alloc(m + f);
+        let offset = (group - slot) as u32;
+        self.slots[slot][0] = match far {
+            Some(far_slot) => {
+                self.slots[far_slot][0] = offset;
+                descriptor_w0((far_slot - slot) as u32, true, mask, 0)
+            }
+            None => {
+                assert!(offset <= CHILD_PTR_MAX, "near child pointer {offset} overflows: far prediction is wrong");
+                descriptor_w0(offset, false, mask, 0)
+            }
+        };
+        let mut far_slots = [None; 8];
+        let mut next_far = group + m;
+        for (k, far_slot) in far_slots.iter_mut().enumerate().take(m) {
+            if flags >> k & 1 == 1 {
+                self.kinds[next_far] = Slot::Far;
+                self.stats.far_pointers += 1;
+                *far_slot = Some(next_far);
+                next_far += 1;
+            }
+        }
+        for (k, far_slot) in far_slots.into_iter().enumerate().take(m) {
+            self.visit(level + 1, first + k, group + k, far_slot);
+        }
+    }
+
+    fn finish(mut self, root_slot: usize) -> Esvo {
+        let desc_words = self.slots.len() * 2;
+        let info = desc_words;
+        let mut words: Vec<u32> = Vec::with_capacity(desc_words + 8 + self.contour_data.len());
+        for (s, (slot, kind)) in self.slots.iter().zip(&self.kinds).enumerate() {
+            match kind {
+                Slot::Header => {
+                    self.stats.page_headers += 1;
+                    words.extend([(info - s * 2) as u32, 0]);
+                }
+                Slot::Pad => {
+                    self.stats.padding_slots += 1;
+                    words.extend(slot);
+                }
+                _ => words.extend(slot),
+            }
+        }
+        // Info section: block pointer (signed, words from the info section to the descriptors),
+        // contour pointer, attachment count, then (type, pointer) per attachment.
+        let attach_count = 1u32;
+        let info_words = INFO_HEADER_WORDS + 2 * attach_count as usize;
+        let contour_word = info + info_words;
+        let attach_word = contour_word + self.contour_data.len();
+        words.push((-(info as i64)) as i32 as u32);
+        words.push((contour_word - info) as u32);
+        words.push(attach_count);
+        let attach_type = match self.attributes {
+            Attributes::Raw => ATTACH_RAW,
+            Attributes::Compressed => ATTACH_COMPRESSED,
+        };
+        words.extend([attach_type, (attach_word - info) as u32]);
+        self.stats.contours = self.contour_data.len() as u64;
+        words.extend(&self.contour_data);
+        let (colour_bytes, normal_bytes, lookup_bytes) = match self.attributes {
+            Attributes::Raw => {
+                self.lookups.resize(self.slots.len(), 0);
+                words.extend(&self.lookups);
+                words.extend(&self.values);
+                (self.values.len() as u64 * 2, self.values.len() as u64 * 2, self.lookups.len() as u64 * 4)
+            }
+            Attributes::Compressed => {
+                let blocks = self.compressed_blocks();
+                for b in &blocks {
+                    words.extend(b.0);
+                }
+                (blocks.len() as u64 * 8, blocks.len() as u64 * 16, 0)
+            }
+        };
+        let tree = self.tree;
+        self.stats.leaf_voxels = tree.voxel_count();
+        self.stats.voxels = tree.voxel_count() + tree.interior_count();
+        self.stats.colour_bytes = colour_bytes;
+        self.stats.normal_bytes = normal_bytes;
+        self.stats.lookup_bytes = lookup_bytes;
+        self.stats.desc_slots = self.slots.len() as u64;
+        Esvo {
+            grid: tree.grid,
+            words,
+            root_slot: root_slot as u32,
+            info_word: info as u32,
+            contour_word: contour_word as u32,
+            attach_word: attach_word as u32,
+            attributes: self.attributes,
+            stats: self.stats,
+            params: EsvoParams::default(),
+            voxelize: Default::default(),
+        }
+    }
+
+    /// One compressed block per pair of slots `(2j, 2j + 1)`: the 16 child values of the two
+    /// descriptors (siblings, or a descriptor and a non-descriptor slot), slot `8·(s & 1) + i`.
+    fn compressed_blocks(&self) -> Vec<CompressedBlock> {
+        let n = self.slots.len().div_ceil(2);
+        (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let mut values = [None; 16];
+                for half in 0..2 {
+                    let Some(Slot::Descriptor { level, voxel }) = self.kinds.get(2 * j + half).copied() else {
+                        continue;
+                    };
+                    let node = &self.tree.levels[level as usize];
+                    let mask = node.masks[voxel as usize] as u32;
+                    let first = node.first_child[voxel as usize] as usize;
+                    let children = &self.tree.levels[level as usize + 1].attrs;
+                    for (k, s) in (0..8).filter(|s| mask >> s & 1 == 1).enumerate() {
+                        let a = children[first + k];
+                        values[half * 8 + s] = Some((a.color, a.normal));
+                    }
+                }
+                compress_block(&values)
+            })
+            .collect()
+    }
+}
+
+/// Which of the children (with predicted subtree sizes `subs`, laid out in this order right after
+/// their group and its far slots) need a far pointer: child `k`'s own group lands
+/// `(m − k) + far + Σ_{j<k} subs[j]` slots after it. Iterated to a fixed point, since each far
+/// slot moves every later group by one.
+fn far_flags(subs: &[u64]) -> u8 {
+    let m = subs.len() as u64;
+    let mut flags = 0u8;
+    loop {
+        let far = flags.count_ones() as u64;
+        let mut next = 0u8;
+        let mut before = 0u64;
+        for (k, &s) in subs.iter().enumerate() {
+            // A child whose children are leaves has no group of its own to point at.
+            if s > 0 && (m - k as u64) + far + before > FAR_THRESHOLD {
+                next |= 1 << k;
+            }
+            before += s;
+        }
+        if next == flags {
+            return flags;
+        }
+        flags = next;
+    }
+}

@@ -1,0 +1,192 @@
+//! ESVO — Laine & Karras, *Efficient Sparse Voxel Octrees* (seed 000 §5–6; DESIGN.md §4.3).
+//!
+//! | file | what |
+//! |---|---|
+//! | [`layout`] | the bit layout: child descriptors, far pointers, page headers, info section |
+//! | [`build`] | octree → layout: contours, depth-first emission, attachments |
+//! | [`contour`] | 32-bit contours: fitting, encoding, the slab a kernel intersects |
+//! | [`attributes`] | raw and compressed colour/normal encodings |
+//!
+//! CPU ray caster (Fig. 15, beam optimisation §6.2): `kernels::cpu::esvo`.
+
+pub mod attributes;
+pub mod build;
+pub mod contour;
+pub mod layout;
+
+use serde::Serialize;
+use serde_json::json;
+
+use crate::svo::voxel_params_json;
+use crate::voxel::{self, VoxelGrid, VoxelizeStats};
+use crate::{BuildError, BuildInput, MemoryReport, Structure};
+
+/// Which attribute attachment the block carries (§5.4 raw, §5.5 compressed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Attributes {
+    Raw,
+    #[default]
+    Compressed,
+}
+
+/// Build and cast parameters (`--levels`, `--contours`, `--attributes`, `--beam`, `esvo.*`).
+#[derive(Clone, Debug, Serialize)]
+pub struct EsvoParams {
+    pub level: u32,
+    /// Fit and store contours, and intersect them when casting.
+    pub contours: bool,
+    /// A contour is stored only if its slab keeps at most this fraction of the cube.
+    pub contour_max_ratio: f32,
+    pub attributes: Attributes,
+    /// Beam optimisation for primary rays (§6.2).
+    pub beam: bool,
+    /// Beam block size in pixels (8×8 or 4×4).
+    pub beam_block: u32,
+    /// LOD: stop at voxels under this many pixels (0 = off, traverse to the leaves).
+    pub lod_pixels: f32,
+}
+
+impl Default for EsvoParams {
+    fn default() -> Self {
+        Self {
+            level: 10,
+            contours: true,
+            contour_max_ratio: 0.5,
+            attributes: Attributes::Compressed,
+            beam: false,
+            beam_block: 8,
+            lod_pixels: 0.0,
+        }
+    }
+}
+
+fn on_off(params: &crate::Params, key: &str, default: bool) -> Result<bool, BuildError> {
+    match params.get(key, if default { "on".to_string() } else { "off".to_string() })?.as_str() {
+        "on" | "true" | "1" => Ok(true),
+        "off" | "false" | "0" => Ok(false),
+        other => Err(BuildError::BadParam { key: key.into(), detail: format!("'{other}' is not on/off") }),
+    }
+}
+
+impl EsvoParams {
+    pub fn from_params(params: &crate::Params) -> Result<Self, BuildError> {
+        let d = Self::default();
+        let attributes = match params.get("esvo.attributes", "compressed".to_string())?.as_str() {
+            "raw" => Attributes::Raw,
+            "compressed" => Attributes::Compressed,
+            other => {
+                return Err(BuildError::BadParam {
+                    key: "esvo.attributes".into(),
+                    detail: format!("'{other}' is not raw or compressed"),
+                });
+            }
+        };
+        let beam_block = params.get("esvo.beam_block", d.beam_block)?;
+        if !(2..=32).contains(&beam_block) {
+            return Err(BuildError::BadParam { key: "esvo.beam_block".into(), detail: "must be 2..=32 pixels".into() });
+        }
+        Ok(Self {
+            level: voxel::level_param(params)?,
+            contours: on_off(params, "esvo.contours", d.contours)?,
+            contour_max_ratio: params.get("esvo.contour_max_ratio", d.contour_max_ratio)?,
+            attributes,
+            beam: on_off(params, "esvo.beam", d.beam)?,
+            beam_block,
+            lod_pixels: params.get("esvo.lod_pixels", d.lod_pixels)?,
+        })
+    }
+}
+
+/// Deterministic counts of a build, for the report and the closing numbers.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EsvoStats {
+    pub descriptors: u64,
+    pub far_pointers: u64,
+    pub page_headers: u64,
+    pub padding_slots: u64,
+    pub desc_slots: u64,
+    pub contours: u64,
+    /// Leaf voxels (the voxelisation).
+    pub leaf_voxels: u64,
+    /// All voxels, interior included (the paper's per-voxel denominator).
+    pub voxels: u64,
+    pub colour_bytes: u64,
+    pub normal_bytes: u64,
+    pub lookup_bytes: u64,
+    pub contour_ms: f64,
+}
+
+/// A built ESVO: the words a kernel reads, plus where the sections start.
+#[derive(Clone, Debug)]
+pub struct Esvo {
+    pub grid: VoxelGrid,
+    /// Descriptor array, info section, contour data and attachment, in one array (uploaded as is).
+    pub words: Vec<u32>,
+    /// Slot of the root's descriptor.
+    pub root_slot: u32,
+    /// Word offsets of the info section, the contour data and the attachment.
+    pub info_word: u32,
+    pub contour_word: u32,
+    pub attach_word: u32,
+    pub attributes: Attributes,
+    pub stats: EsvoStats,
+    pub params: EsvoParams,
+    pub voxelize: VoxelizeStats,
+}
+
+impl Esvo {
+    pub fn build(input: &BuildInput) -> Result<Self, BuildError> {
+        Ok(build::build(input.scene, EsvoParams::from_params(input.params)?))
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.stats.descriptors == 0
+    }
+}
+
+impl Structure for Esvo {
+    fn name(&self) -> &'static str {
+        "esvo"
+    }
+
+    fn memory(&self) -> MemoryReport {
+        let s = &self.stats;
+        // First descriptor words are the hierarchy, second words the contour lookup (§5.6).
+        let hierarchy = s.descriptors * 4;
+        let contours = s.descriptors * 4 + s.contours * 4;
+        MemoryReport::new(s.descriptors, s.descriptors + s.far_pointers)
+            .with("hierarchy", hierarchy)
+            .with("far_pointers", s.far_pointers * 8)
+            .with("page_headers", s.page_headers * 8)
+            .with("padding", s.padding_slots * 8)
+            .with("info", ((self.contour_word - self.info_word) * 4) as u64)
+            .with("contours", contours)
+            .with("attr_lookup", s.lookup_bytes)
+            .with("colour", s.colour_bytes)
+            .with("normal", s.normal_bytes)
+    }
+
+    fn params(&self) -> serde_json::Value {
+        let mut v = voxel_params_json(&self.grid, self.stats.leaf_voxels, &self.voxelize);
+        let s = &self.stats;
+        let per_voxel = |b: u64| b as f64 / s.voxels.max(1) as f64;
+        let m = self.memory();
+        let bytes = |name: &str| m.components.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b);
+        v["esvo"] = json!({
+            "params": self.params,
+            "stats": s,
+            "far_pointer_count": s.far_pointers,
+            "contour_fraction": s.contours as f64 / (s.voxels.saturating_sub(1)).max(1) as f64,
+            "bytes_per_voxel": {
+                "hierarchy": per_voxel(bytes("hierarchy") + bytes("far_pointers") + bytes("page_headers") + bytes("padding")),
+                "contours": per_voxel(bytes("contours")),
+                "colour": per_voxel(bytes("colour") + bytes("attr_lookup") / 2),
+                "normal": per_voxel(bytes("normal") + bytes("attr_lookup") / 2),
+                "total": per_voxel(m.total_bytes()),
+                "paper": {"hierarchy": 1.0, "contours": 1.0, "colour": 1.0, "normal": 2.0, "total": 5.0},
+            },
+        });
+        v
+    }
+}
