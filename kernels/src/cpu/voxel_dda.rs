@@ -33,8 +33,7 @@ pub struct VoxelHit {
 pub fn first_voxel(set: &VoxelSet, ray: &Ray, t_min: f32, t_max: f32) -> Option<VoxelHit> {
     let r = OctreeRay::new(&set.grid, ray);
     let (t0, t1) = r.root_span(t_min, t_max);
-    // `!(≤)` also rejects a NaN span (a non-finite ray).
-    if !(t0 <= t1) {
+    if t0 > t1 {
         return None;
     }
     let cells = 1i64 << set.grid.level;
@@ -58,7 +57,7 @@ pub fn first_voxel(set: &VoxelSet, ray: &Ray, t_min: f32, t_max: f32) -> Option<
                 stepped = true;
             }
         }
-        // `stepped` is false only for NaN distances; never loop on them.
+        // `stepped` is false only for NaN distances (a non-finite ray); never loop on them.
         if !stepped || k.iter().any(|&x| x < 0) {
             return None;
         }

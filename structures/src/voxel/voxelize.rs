@@ -42,7 +42,7 @@ const SLACK: f64 = 1e-6;
 
 /// Sub-cubes processed in parallel per window, per thread: enough to balance uneven sub-cubes,
 /// few enough that a window's pairs and chunks stay small.
-const WINDOW_PER_THREAD: usize = 8;
+const WINDOW_PER_THREAD: usize = 16;
 
 /// What a voxelisation did and cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -66,8 +66,10 @@ pub struct VoxelizeStats {
 /// test of Akenine-Möller, "Fast 3D Triangle-Box Overlap Testing" (JGT 2001): the three box axes,
 /// the triangle's normal and the nine cross products of a triangle edge with a box axis.
 ///
-/// The test runs in f64 on coordinates relative to the box centre, so touching counts: a triangle
-/// lying exactly on a face of the box overlaps it. A degenerate triangle (a segment or a point)
+/// The test runs in f64 in a frame at the triangle's first vertex, where the differences of f32
+/// coordinates are exact, so touching counts: a triangle lying exactly on a face of the box
+/// overlaps it (touching along an edge or at a corner is decided up to f64 rounding, which is why
+/// the voxeliser grows its boxes by a hair). A degenerate triangle (a segment or a point)
 /// has a zero normal and zero edge axes, which separate nothing, so it is tested as the segment or
 /// point it is; nothing divides.
 pub fn triangle_overlaps_box(tri: &[Vec3; 3], center: Vec3, half: Vec3) -> bool {
@@ -99,7 +101,14 @@ pub fn voxelize<E>(
     stats.subcubes = nonempty.len() as u64;
     let window = WINDOW_PER_THREAD * rayon::current_num_threads().max(1);
     for group in nonempty.chunks(window) {
-        let outs: Vec<SubcubeOutput> = group.par_iter().map(|&s| v.process_subcube(s, bins.list(s))).collect();
+        // Largest first, so that no thread is left with a big sub-cube at the window's end.
+        let mut order: Vec<usize> = (0..group.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(bins.list(group[i]).len()));
+        let mut outs: Vec<(usize, SubcubeOutput)> =
+            order.par_iter().with_max_len(1).map(|&i| (i, v.process_subcube(group[i], bins.list(group[i])))).collect();
+        outs.sort_unstable_by_key(|&(i, _)| i);
+        let outs = outs.into_iter().map(|(_, out)| out);
+        let outs: Vec<SubcubeOutput> = outs.collect();
         let held: u64 = outs.iter().map(|o| o.pair_bytes + chunk_bytes(&o.chunk)).sum();
         stats.peak_chunk_bytes = stats.peak_chunk_bytes.max(held);
         for out in outs {
@@ -406,7 +415,7 @@ impl TriangleSat {
 /// meet `[lo − margin, hi + margin]`, clamped to `clamp`; `None` if empty.
 fn cell_range(lo: f64, hi: f64, cell: f64, margin: f64, clamp: [i64; 2]) -> Option<[i64; 2]> {
     let first = (-floor((margin - lo) / cell) - 1).max(clamp[0]);
-    let last = (floor((hi + margin) / cell) - 1).min(clamp[1]);
+    let last = floor((hi + margin) / cell).min(clamp[1]);
     (first <= last).then_some([first, last])
 }
 
