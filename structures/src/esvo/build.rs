@@ -241,9 +241,7 @@ impl<'a> Emitter<'a> {
             let s = self.slots.len();
             if s % PAGE_SLOTS == 0 {
                 self.push(Slot::Header);
-            } else if even && s % 2 == 1 {
-                self.push(Slot::Pad);
-            } else if s / PAGE_SLOTS != (s + n - 1) / PAGE_SLOTS {
+            } else if (even && s % 2 == 1) || s / PAGE_SLOTS != (s + n - 1) / PAGE_SLOTS {
                 self.push(Slot::Pad);
             } else {
                 for _ in 0..n {
