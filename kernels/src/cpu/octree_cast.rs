@@ -73,6 +73,7 @@ pub type ContourSpan = fn(contour: u32, cube_min: Vec3, cube_size: f32, ray: &sc
 
 /// Casts `ray` (octree space) through `nodes`; see the module doc.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // the caster's registers, as in Fig. 15
 pub fn cast<L: CastNodes, S: Stats>(
     nodes: &L,
     ray: &scenes::Ray,

@@ -227,6 +227,7 @@ fn occluded(accel: &dyn Traverse, ray: &Ray, t_max: f32, counters: &mut Option<&
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn shade_pixel(
     accel: &dyn Traverse,
     camera: &Camera,

@@ -239,7 +239,7 @@ impl<'a> Emitter<'a> {
         let even = self.attributes == Attributes::Compressed;
         loop {
             let s = self.slots.len();
-            if s % PAGE_SLOTS == 0 {
+            if s.is_multiple_of(PAGE_SLOTS) {
                 self.push(Slot::Header);
             } else if (even && s % 2 == 1) || s / PAGE_SLOTS != (s + n - 1) / PAGE_SLOTS {
                 self.push(Slot::Pad);

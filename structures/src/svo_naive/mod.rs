@@ -51,7 +51,7 @@ impl SvoNaive {
             leaf_normals: svo.leaf_normals.clone(),
             first_leaf,
             voxels: svo.voxels,
-            voxelize: svo.voxelize.clone(),
+            voxelize: svo.voxelize,
         }
     }
 
