@@ -168,13 +168,7 @@ pub fn cast<L: CastNodes, S: Stats>(
         }
 
         // ADVANCE: step to the next cube of the same scale through the exit plane(s).
-        let mut step_mask = 0u32;
-        for a in 0..3 {
-            if corner[a] <= tc_max {
-                step_mask ^= 1 << a;
-                pos[a] -= scale_exp2;
-            }
-        }
+        let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
 
@@ -229,6 +223,21 @@ pub fn world_cube(pos: Vec3, size: f32, mirror_mask: u32) -> (Vec3, f32) {
         }
     }
     (lo, size)
+}
+
+/// ADVANCE (Fig. 15 lines 28–30): moves the mirrored cube at `pos` (side `size`) one cube down
+/// every axis whose exit plane is crossed first (`corner` holds the exit distances, `tc_max`
+/// their minimum; ties step several axes, through an edge or corner). Returns the stepped axes.
+#[inline(always)]
+pub fn advance(pos: &mut Vec3, corner: Vec3, tc_max: f32, size: f32) -> u32 {
+    let mut step_mask = 0u32;
+    for a in 0..3 {
+        if corner[a] <= tc_max {
+            step_mask ^= 1 << a;
+            pos[a] -= size;
+        }
+    }
+    step_mask
 }
 
 impl<N> CastHit<N> {

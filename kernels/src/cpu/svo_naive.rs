@@ -9,7 +9,7 @@ use glam::Vec3;
 use scenes::Ray;
 use structures::svo_naive::{EMPTY, LEAF, SvoNaive};
 
-use super::octree_cast::CastHit;
+use super::octree_cast::{CastHit, advance};
 use super::octree_ray::{OctreeRay, S_MAX};
 use super::svo::leaf_hit;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
@@ -76,13 +76,7 @@ fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mu
             continue;
         }
         // ADVANCE
-        let mut step_mask = 0u32;
-        for a in 0..3 {
-            if corner[a] <= tc_max {
-                step_mask ^= 1 << a;
-                pos[a] -= size;
-            }
-        }
+        let step_mask = advance(&mut pos, corner, tc_max, size);
         t_min = tc_max;
         // In the mirrored frame the ray moves to lower halves: a step that sets a bit left the block.
         idx ^= step_mask;
