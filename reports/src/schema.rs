@@ -129,6 +129,10 @@ pub struct Timing {
     pub ms_min: f64,
     pub ms_max: f64,
     pub reps: u32,
+    /// Every timed repetition in the order run, so that paired statistics (the reference's rep
+    /// `i` against this rep `i`) can be formed later.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub samples_ms: Vec<f64>,
 }
 
 impl Timing {
@@ -147,6 +151,7 @@ impl Timing {
             ms_min: s.first().copied().unwrap_or(0.0),
             ms_max: s.last().copied().unwrap_or(0.0),
             reps: n as u32,
+            samples_ms: samples.to_vec(),
         }
     }
 }
