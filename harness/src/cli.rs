@@ -1,5 +1,5 @@
-//! The command line (DESIGN.md §7): `run` (the default), `list`; presets fill in whatever the
-//! user does not say.
+//! The command line (DESIGN.md §7): `run` (the default), `compare`, `merge`, `list`; presets fill
+//! in whatever the user does not say.
 
 use std::path::PathBuf;
 
@@ -26,6 +26,12 @@ pub struct Cli {
 pub enum Command {
     /// Build and time every (scene, structure, backend) of the matrix; write results and a report.
     Run(Box<RunArgs>),
+    /// Compare a run with a baseline: per case the change in every metric; exit status 1 when any
+    /// metric regressed beyond its threshold or a baseline case is missing, 2 on a usage or I/O error.
+    Compare(CompareArgs),
+    /// Merge runs from several machines into one result file and report, each case tagged with its
+    /// machine.
+    Merge(MergeArgs),
     /// List scenes, structures, backends or presets.
     List {
         #[arg(value_enum, default_value_t = ListWhat::All)]
@@ -46,7 +52,9 @@ pub enum ListWhat {
 pub enum Preset {
     /// A few small scenes at 256×256: a smoke test in seconds.
     Quick,
-    /// Every built-in scene except the two largest dragons, at 256×256: small enough for CI.
+    /// Every built-in scene except the two largest dragons, at 256×256, on one worker thread:
+    /// small enough for CI, and timing ratios that do not depend on how many cores a shared runner
+    /// leaves free (the baseline of `harness compare` in `.ci/run`).
     Ci,
     /// Every built-in scene at 512×512, every structure.
     Default,
@@ -105,7 +113,7 @@ pub struct RunArgs {
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
-    /// Worker threads for builds and renders (default: all logical cores).
+    /// Worker threads for builds and renders (default: all logical cores; 1 for the ci preset).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Timed repetitions per build and per render (at least 5 for results that count).
@@ -132,6 +140,39 @@ pub struct RunArgs {
     /// Time code even if the harness was compiled without optimisation (numbers are then meaningless).
     #[arg(long)]
     pub allow_unoptimized: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// The new run: a run directory (holding results.json) or a results.json file.
+    #[arg(value_name = "NEW")]
+    pub new: PathBuf,
+    /// The baseline, likewise.
+    #[arg(value_name = "BASE")]
+    pub base: PathBuf,
+    /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2,
+    /// bytes=0, timing_floor_ms=2. Overrides --thresholds.
+    #[arg(long = "threshold", value_name = "METRIC=FRACTION")]
+    pub thresholds: Vec<String>,
+    /// TOML file of `metric = fraction` lines (see .ci/thresholds.toml).
+    #[arg(long = "thresholds", value_name = "FILE")]
+    pub threshold_file: Option<PathBuf>,
+    /// Print every compared metric, not only those that changed beyond their threshold.
+    #[arg(long)]
+    pub all: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// Run directories (or results.json files) to merge, e.g. one from a GPU box and one from a laptop.
+    #[arg(value_name = "RUN", required = true, num_args = 2..)]
+    pub runs: Vec<PathBuf>,
+    /// Where to write the merged results.json, report.md, report.html and images/.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Machine tags, one per run in order (default: each run's hostname, made unique).
+    #[arg(long = "tag", value_name = "NAME")]
+    pub tags: Vec<String>,
 }
 
 /// Everything a run needs, with presets applied.
@@ -201,6 +242,16 @@ impl Preset {
         list.into_iter().map(String::from).collect()
     }
 
+    /// Worker threads the preset asks for; `None`: all logical cores. The ci preset runs on one:
+    /// a parallel reference timed against a serial build would otherwise swing with the cores
+    /// another tenant leaves free, and `harness compare` gates on such ratios.
+    fn threads(self) -> Option<usize> {
+        match self {
+            Preset::Ci => Some(1),
+            _ => None,
+        }
+    }
+
     fn size(self) -> (u32, u32) {
         match self {
             Preset::Quick | Preset::Ci => (256, 256),
@@ -236,7 +287,10 @@ impl RunArgs {
                 .collect(),
             width: self.width.unwrap_or(w),
             height: self.height.unwrap_or(h),
-            threads: self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
+            threads: self
+                .threads
+                .or(preset.threads())
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
             params: preset.params().iter().map(|p| p.to_string()).chain(self.params.iter().cloned()).collect(),
