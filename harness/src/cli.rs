@@ -1,5 +1,5 @@
-//! The command line (DESIGN.md §7): `run` (the default), `compare`, `merge`, `list`; presets fill
-//! in whatever the user does not say.
+//! The command line (DESIGN.md §7): `run` (the default), `compare`, `merge`, `report`, `list`;
+//! presets fill in whatever the user does not say.
 
 use std::path::PathBuf;
 
@@ -32,6 +32,13 @@ pub enum Command {
     /// Merge runs from several machines into one result file and report, each case tagged with its
     /// machine.
     Merge(MergeArgs),
+    /// Rewrite a run's report.md and report.html from its results.json (after the report code
+    /// changed, or for a results.json copied from elsewhere).
+    Report {
+        /// The run directory (holding results.json and images/).
+        #[arg(value_name = "RUN")]
+        run: PathBuf,
+    },
     /// List scenes, structures, backends or presets.
     List {
         #[arg(value_enum, default_value_t = ListWhat::All)]

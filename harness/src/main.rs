@@ -38,6 +38,8 @@ fn main() -> ExitCode {
             };
         }
         Some(Command::Merge(args)) => merge::merge(&args, command),
+        Some(Command::Report { run }) => output::read_results(&run)
+            .and_then(|(dir, results)| output::write_results(&dir, &results, &mut Default::default())),
         Some(Command::List { what }) => {
             list(what);
             Ok(())

@@ -59,10 +59,9 @@ body { font: 14px/1.45 system-ui, -apple-system, 'Segoe UI', Roboto, sans-serif;
 h1 { margin: 24px 0 8px; } h2 { margin-top: 40px; border-bottom: 2px solid #d8dee9; padding-bottom: 4px; }
 h3 { margin-top: 28px; }
 table { border-collapse: collapse; margin: 8px 0 16px; font-variant-numeric: tabular-nums; }
-th, td { padding: 3px 9px; border-bottom: 1px solid #e5e9f0; text-align: right; white-space: nowrap; }
+th, td { padding: 3px 6px; border-bottom: 1px solid #e5e9f0; text-align: right; white-space: nowrap; font-size: 13px; }
 th { background: #eceff4; position: sticky; top: 0; }
 td:first-child, th:first-child, td.text, th.text { text-align: left; }
-td.wrap { white-space: normal; min-width: 220px; }
 tr:nth-child(even) td { background: #f8f9fb; }
 td.best { font-weight: 600; color: #1b6e3a; }
 .held { color: #1b6e3a; } .not-held { color: #b3261e; }
@@ -71,8 +70,8 @@ td.best { font-weight: 600; color: #1b6e3a; }
 .charts { display: flex; flex-wrap: wrap; gap: 10px; } .charts svg { border: 1px solid #e5e9f0; max-width: 100%; height: auto; }
 .shots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; padding: 8px; border: 1px solid #e5e9f0; border-radius: 6px; background: #fafbfc; }
-figure .pair { display: flex; gap: 6px; } figure img { width: 220px; height: auto; display: block; background: #222; }
-figcaption { font-weight: 600; margin-bottom: 4px; } .missing { width: 220px; height: 150px; display: flex;
+figure .pair { display: flex; gap: 6px; } figure img { width: 200px; height: auto; display: block; background: #222; }
+figcaption { font-weight: 600; margin-bottom: 4px; } .missing { width: 200px; height: 150px; display: flex;
   align-items: center; justify-content: center; color: #888; border: 1px dashed #bbb; }
 .heat { display: inline-block; width: 160px; height: 10px; vertical-align: middle;
   background: linear-gradient(to right, #000 0%, #1a1acc 25%, #d91a1a 50%, #ffd900 75%, #fff 100%); border: 1px solid #999; }
@@ -254,26 +253,33 @@ fn scaling_section(out: &mut String, studies: &[scaling::Study]) {
     let _ = writeln!(
         out,
         "<section id=\"scaling\"><h2>Scaling</h2>\n<p class=\"note\">Log–log, one series per structure across the \
-         scenes of a family (or the resolutions of a voxel structure); k is the least-squares exponent of y ∝ x^k \
-         (1 = linear).</p>\n<table><tr><th class=\"text\">study</th><th class=\"text\">structure</th><th>points</th>\
-         <th>k</th></tr>"
+         scenes of a family (or the resolutions of a voxel structure). The table gives k, the least-squares exponent of \
+         y ∝ x^k (1 = linear; per voxel level also the growth factor 2^k).</p>"
     );
-    for s in studies {
-        for series in &s.series {
-            let k = series.exponent.map_or("—".into(), |k| match s.x {
-                Axis::Triangles => format!("{k:.2}"),
-                Axis::Resolution => format!("{k:.2} (×{:.1} per level)", k.exp2()),
-            });
-            let _ = writeln!(
-                out,
-                "<tr><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{}</td><td>{k}</td></tr>",
-                esc(&s.title),
-                esc(&series.label),
-                series.points.len()
-            );
+    let mut labels: Vec<&str> = Vec::new();
+    for series in studies.iter().flat_map(|s| &s.series) {
+        if !labels.contains(&series.label.as_str()) {
+            labels.push(&series.label);
         }
     }
-    let _ = writeln!(out, "</table>\n<div class=\"charts\">");
+    let _ = write!(out, "<div class=\"scroll\"><table><tr><th class=\"text\">study</th>");
+    for l in &labels {
+        let _ = write!(out, "<th>{}</th>", esc(l));
+    }
+    let _ = writeln!(out, "</tr>");
+    for s in studies {
+        let _ = write!(out, "<tr><td class=\"text\">{}</td>", esc(&s.title));
+        for l in &labels {
+            let k = s.series.iter().find(|series| series.label == *l).and_then(|series| series.exponent);
+            let cell = k.map_or("—".into(), |k| match s.x {
+                Axis::Triangles => format!("{k:.2}"),
+                Axis::Resolution => format!("{k:.2} (×{:.1})", k.exp2()),
+            });
+            let _ = write!(out, "<td>{cell}</td>");
+        }
+        let _ = writeln!(out, "</tr>");
+    }
+    let _ = writeln!(out, "</table></div>\n<div class=\"charts\">");
     for s in studies {
         chart(out, plots::scaling(s));
     }
@@ -310,9 +316,12 @@ fn scene_section(out: &mut String, cases: &[&Case], images: &BTreeMap<String, St
 fn summary_table(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(
         out,
-        "<div class=\"scroll\"><table>\n<tr><th>structure</th><th class=\"text\">backend</th><th class=\"text\">workload</th>\
+        "<div class=\"scroll\"><table>\n<tr><th>structure</th><th class=\"text\">backend/workload</th>\
          <th>memory</th><th>N_c</th><th>N_p</th><th>build ms</th><th>render ms</th><th>Mrays/s</th><th>steps/ray</th>\
-         <th>visits/ray</th><th>tests/ray</th><th>hit %</th><th class=\"text\">agreement</th></tr>"
+         <th>visits/ray</th><th>tests/ray</th><th>hit %</th>\
+         <th class=\"text\" title=\"what the primary hits were checked against, on how many pixels\">checked vs</th>\
+         <th title=\"pixels where one side hits and the other misses / where both hit different triangles\">mismatches</th>\
+         <th title=\"largest |t − t_ref| / t_ref\">max t err</th></tr>"
     );
     for case in cases {
         let b = &case.build.timing;
@@ -324,9 +333,9 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
             let t = &r.timing;
             let _ = writeln!(
                 out,
-                "<tr><td>{label}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td title=\"{} bytes\">{}</td>\
+                "<tr><td>{label}</td><td class=\"text\">{}/{}</td><td title=\"{} bytes\">{}</td>\
                  <td>{}</td><td>{}</td><td>{:.1} [{:.1}–{:.1}]</td><td>{:.2} [{:.2}–{:.2}]</td><td>{:.2}</td><td>{:.1}</td>\
-                 <td>{:.1}</td><td>{:.1}</td><td>{:.1}</td><td class=\"text wrap\">{}</td></tr>",
+                 <td>{:.1}</td><td>{:.1}</td><td>{:.1}</td>{}</tr>",
                 esc(&r.backend),
                 esc(&r.workload),
                 case.memory.bytes,
@@ -344,19 +353,24 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
                 r.node_visits_per_ray_mean,
                 r.prim_tests_per_ray_mean,
                 100.0 * r.hit_fraction,
-                esc(&agreement(r.agreement.as_ref()))
+                agreement(r.agreement.as_ref())
             );
         }
     }
     let _ = writeln!(out, "</table></div>");
 }
 
+/// The agreement cells: reference and pixels, mismatches (hit/miss / triangle), max t error.
 fn agreement(a: Option<&Agreement>) -> String {
     match a {
-        None => "—".into(),
+        None => "<td class=\"text\">—</td><td>—</td><td>—</td>".into(),
         Some(a) => format!(
-            "{} on {} px: {} hit/miss, {} triangle, max rel t err {:.1e}",
-            a.reference, a.pixels, a.hit_mismatches, a.prim_mismatches, a.max_rel_t_error
+            "<td class=\"text\">{}, {} px</td><td>{} / {}</td><td>{:.1e}</td>",
+            esc(&a.reference),
+            a.pixels,
+            a.hit_mismatches,
+            a.prim_mismatches,
+            a.max_rel_t_error
         ),
     }
 }

@@ -12,7 +12,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::scaling::{Axis, Study};
 
 /// Bar chart size in SVG pixels: three side by side on a wide screen.
-const BAR_SIZE: (u32, u32) = (440, 320);
+const BAR_SIZE: (u32, u32) = (420, 320);
 /// Scaling plot size: wider, for the legend with its exponents.
 const SCALING_SIZE: (u32, u32) = (660, 400);
 const LABEL_FONT: (&str, u32) = ("sans-serif", 13);
@@ -94,6 +94,7 @@ pub fn grouped_bars(title: &str, y_label: &str, categories: &[String], series: &
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(0)
+            .y_label_formatter(&|y| significant(*y))
             .y_desc(y_label)
             .label_style(LABEL_FONT)
             .axis_desc_style(LABEL_FONT)
@@ -159,6 +160,7 @@ pub fn stacked_bars(
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(0)
+            .y_label_formatter(&|y| significant(*y))
             .y_desc(y_label)
             .label_style(LABEL_FONT)
             .axis_desc_style(LABEL_FONT)
@@ -284,25 +286,34 @@ fn nice_top(top: f64, legend: usize) -> f64 {
 /// 1200 → "1.2k", 3.5e6 → "3.5M".
 fn si(v: f64) -> String {
     match v.abs() {
-        a if a >= 1e6 => format!("{}M", trim(v / 1e6)),
-        a if a >= 1e3 => format!("{}k", trim(v / 1e3)),
-        _ => trim(v),
+        a if a >= 1e6 => format!("{}M", significant(v / 1e6)),
+        a if a >= 1e3 => format!("{}k", significant(v / 1e3)),
+        _ => significant(v),
     }
 }
 
-fn trim(v: f64) -> String {
-    let s = format!("{v:.2}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
-}
-
-/// 2048 → "2 KiB".
+/// 2048 → "2 KiB", to three significant digits.
 fn bytes(v: f64) -> String {
-    match v {
-        v if v >= (1u64 << 30) as f64 => format!("{} GiB", trim(v / (1u64 << 30) as f64)),
-        v if v >= (1u64 << 20) as f64 => format!("{} MiB", trim(v / (1u64 << 20) as f64)),
-        v if v >= 1024.0 => format!("{} KiB", trim(v / 1024.0)),
-        v => format!("{} B", trim(v)),
-    }
+    let (scaled, unit) = match v {
+        v if v >= (1u64 << 30) as f64 => (v / (1u64 << 30) as f64, "GiB"),
+        v if v >= (1u64 << 20) as f64 => (v / (1u64 << 20) as f64, "MiB"),
+        v if v >= 1024.0 => (v / 1024.0, "KiB"),
+        v => (v, "B"),
+    };
+    format!("{} {unit}", significant(scaled))
+}
+
+/// Three significant digits, trailing zeros trimmed: 976.56 → "977", 1.5 → "1.5".
+fn significant(v: f64) -> String {
+    let decimals = if v >= 100.0 {
+        0
+    } else if v >= 10.0 {
+        1
+    } else {
+        2
+    };
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
 #[cfg(test)]
@@ -340,5 +351,7 @@ mod tests {
         assert_eq!(si(3_500_000.0), "3.5M");
         assert_eq!(bytes(2048.0), "2 KiB");
         assert_eq!(bytes(1.5 * (1u64 << 20) as f64), "1.5 MiB");
+        assert_eq!(bytes(976.56 * 1024.0), "977 KiB");
+        assert_eq!(si(0.25), "0.25");
     }
 }

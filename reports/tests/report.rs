@@ -53,7 +53,8 @@ fn html_tables_carry_the_fixture_values() {
         "<td>13.43 [13.20–13.80]</td>",     // its render ms
         "<td>9.2</td>",                     // its steps per ray
         "<td>29.2</td>",                    // hit %
-        "brute-force on 512 px",
+        "brute-force, 512 px",
+        "<td>0 / 0</td>",
         "<td>0.48</td>",   // bvh dragon-11k Mrays/s in the summary
         "<td>371706</td>", // rg dragon-48k N_c
         "2.45 MiB",        // rg dragon-48k memory
