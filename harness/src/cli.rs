@@ -157,8 +157,12 @@ pub struct CompareArgs {
     /// The baseline, likewise.
     #[arg(value_name = "BASE")]
     pub base: PathBuf,
-    /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2,
-    /// bytes=0, timing_floor_ms=2. Overrides --thresholds.
+    /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2.
+    /// Overrides --thresholds. Metrics and defaults: bytes, components, nodes, pointers 1e-9;
+    /// triangles, hit_mismatches, prim_mismatches exact; steps_per_ray, visits_per_ray,
+    /// tests_per_ray, hit_fraction 1e-6; render, build, render_geomean, build_geomean 0.15 (ratios
+    /// to the reference); render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter
+    /// times are shown, not gated).
     #[arg(long = "threshold", value_name = "METRIC=FRACTION")]
     pub thresholds: Vec<String>,
     /// TOML file of `metric = fraction` lines (see .ci/thresholds.toml).
