@@ -24,111 +24,14 @@ use std::fmt::Write;
 
 use crate::schema::{Case, RenderStats, Results, Timing};
 
+mod table;
+mod thresholds;
+
+use thresholds::{Kind, METRICS};
+pub use thresholds::{ThresholdError, Thresholds};
+
 /// The structure timings are divided by (DESIGN.md §4.5: the reference BVH).
 pub const REFERENCE: &str = "bvh";
-
-/// How a metric's change is judged.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    /// Deterministic, lower is better: a rise beyond tolerance is a regression.
-    Count,
-    /// Deterministic, must not change in either direction.
-    Exact,
-    /// A time or time ratio, lower is better, relative threshold.
-    Timing,
-    /// Not a metric: a setting kept with the thresholds.
-    Setting,
-}
-
-/// Every threshold name with its kind and default (fractions, except `timing_floor_ms`).
-const METRICS: &[(&str, Kind, f64)] = &[
-    ("bytes", Kind::Count, 1e-9),
-    ("components", Kind::Count, 1e-9),
-    ("nodes", Kind::Count, 1e-9),
-    ("pointers", Kind::Count, 1e-9),
-    ("triangles", Kind::Exact, 0.0),
-    ("steps_per_ray", Kind::Count, 1e-6),
-    ("visits_per_ray", Kind::Count, 1e-6),
-    ("tests_per_ray", Kind::Count, 1e-6),
-    ("hit_fraction", Kind::Exact, 1e-6),
-    ("hit_mismatches", Kind::Count, 0.0),
-    ("prim_mismatches", Kind::Count, 0.0),
-    ("render", Kind::Timing, 0.15),
-    ("build", Kind::Timing, 0.15),
-    ("render_geomean", Kind::Timing, 0.15),
-    ("build_geomean", Kind::Timing, 0.15),
-    ("render_raw", Kind::Timing, 0.5),
-    ("build_raw", Kind::Timing, 0.5),
-    ("timing_floor_ms", Kind::Setting, 1.0),
-];
-
-#[derive(Debug, thiserror::Error)]
-pub enum ThresholdError {
-    #[error("unknown metric '{metric}' (known: {known})")]
-    UnknownMetric { metric: String, known: String },
-    #[error("the threshold of '{metric}' must be a finite number ≥ 0, not {value}")]
-    BadValue { metric: String, value: String },
-    #[error("expected METRIC=FRACTION (e.g. render=0.15), not '{0}'")]
-    Syntax(String),
-    #[error("threshold file: {0}")]
-    Toml(#[from] toml::de::Error),
-}
-
-/// Per-metric thresholds: relative tolerances for deterministic metrics, allowed slowdowns for
-/// timings (0.15 = 15 %), and the `timing_floor_ms` under which timings are not gated.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Thresholds {
-    values: BTreeMap<&'static str, f64>,
-}
-
-impl Default for Thresholds {
-    fn default() -> Self {
-        Self { values: METRICS.iter().map(|&(name, _, default)| (name, default)).collect() }
-    }
-}
-
-impl Thresholds {
-    /// The threshold of `metric` (0 for an unknown name, which [`Thresholds::set`] refuses).
-    pub fn get(&self, metric: &str) -> f64 {
-        self.values.get(metric).copied().unwrap_or(0.0)
-    }
-
-    pub fn set(&mut self, metric: &str, value: f64) -> Result<(), ThresholdError> {
-        let Some(&(name, _, _)) = METRICS.iter().find(|(name, _, _)| *name == metric) else {
-            return Err(ThresholdError::UnknownMetric { metric: metric.into(), known: Self::names().join(", ") });
-        };
-        if !value.is_finite() || value < 0.0 {
-            return Err(ThresholdError::BadValue { metric: metric.into(), value: value.to_string() });
-        }
-        self.values.insert(name, value);
-        Ok(())
-    }
-
-    /// Applies `metric=fraction`, as given to `--threshold`.
-    pub fn apply_assignment(&mut self, text: &str) -> Result<(), ThresholdError> {
-        let (metric, value) = text.split_once('=').ok_or_else(|| ThresholdError::Syntax(text.into()))?;
-        let value: f64 = value
-            .trim()
-            .parse()
-            .map_err(|_| ThresholdError::BadValue { metric: metric.trim().into(), value: value.trim().into() })?;
-        self.set(metric.trim(), value)
-    }
-
-    /// Applies a TOML file's top-level table of `metric = fraction`.
-    pub fn apply_toml(&mut self, text: &str) -> Result<(), ThresholdError> {
-        let table: BTreeMap<String, f64> = toml::from_str(text)?;
-        table.iter().try_for_each(|(metric, &value)| self.set(metric, value))
-    }
-
-    /// Every threshold name, in the order of the table above.
-    pub fn names() -> Vec<&'static str> {
-        METRICS.iter().map(|(name, _, _)| *name).collect()
-    }
-
-    fn floor_ms(&self) -> f64 {
-        self.get("timing_floor_ms")
-    }
-}
 
 /// What a row's comparison found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -503,163 +406,15 @@ fn metric_name(kind: &str, raw: bool) -> &'static str {
     }
 }
 
-impl Comparison {
-    /// True when any row regressed or went missing.
-    pub fn failed(&self) -> bool {
-        self.rows.iter().any(|r| r.status.fails())
-    }
-
-    /// A plain-text table: every row with `all`, else only rows that are not `ok`/`info`.
-    pub fn table(&self, all: bool) -> String {
-        let rows: Vec<&Row> =
-            self.rows.iter().filter(|r| all || !matches!(r.status, Status::Ok | Status::Info)).collect();
-        let header = ["scene", "structure", "render", "metric", "base", "new", "change", "threshold", "status", "note"];
-        let cells: Vec<[String; 10]> = rows
-            .iter()
-            .map(|r| {
-                [
-                    r.scene.clone(),
-                    r.structure.clone(),
-                    r.render.clone(),
-                    r.metric.clone(),
-                    r.base.map_or("—".into(), fmt_value),
-                    r.new.map_or("—".into(), fmt_value),
-                    r.change.map_or("—".into(), fmt_change),
-                    r.threshold.map_or("—".into(), fmt_threshold),
-                    r.status.word().into(),
-                    r.note.clone(),
-                ]
-            })
-            .collect();
-        let mut widths = header.map(|h| h.chars().count());
-        for row in &cells {
-            for (w, cell) in widths.iter_mut().zip(row) {
-                *w = (*w).max(cell.chars().count());
-            }
-        }
-        let mut out = String::new();
-        let line = |out: &mut String, cells: &[String]| {
-            for (i, (cell, w)) in cells.iter().zip(widths).enumerate() {
-                let pad = w.saturating_sub(cell.chars().count());
-                // Numbers right-aligned, text left-aligned; the last column unpadded.
-                if (4..8).contains(&i) {
-                    let _ = write!(out, "{}{cell}  ", " ".repeat(pad));
-                } else if i + 1 == cells.len() {
-                    let _ = write!(out, "{cell}");
-                } else {
-                    let _ = write!(out, "{cell}{}  ", " ".repeat(pad));
-                }
-            }
-            out.push('\n');
-        };
-        if !cells.is_empty() {
-            line(&mut out, &header.map(String::from));
-            for row in &cells {
-                line(&mut out, row);
-            }
-        }
-        out
-    }
-
-    /// Counts by status, the worst timing change and the verdict, on a few lines.
-    pub fn summary(&self) -> String {
-        let count = |s: Status| self.rows.iter().filter(|r| r.status == s).count();
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "{} comparisons of NEW {} against BASE {}: {} regressions, {} missing, {} improved, {} new, {} not gated",
-            self.rows.len(),
-            self.new_run,
-            self.base_run,
-            count(Status::Regression),
-            count(Status::Missing),
-            count(Status::Improved),
-            count(Status::New),
-            count(Status::Info)
-        );
-        for metric in ["render", "build", "render_geomean", "build_geomean"] {
-            let worst = self
-                .rows
-                .iter()
-                .filter(|r| r.metric == metric && r.status != Status::Info)
-                .filter_map(|r| Some((r.change?, r)))
-                .max_by(|a, b| a.0.total_cmp(&b.0));
-            if let Some((change, r)) = worst {
-                let what = [r.scene.as_str(), &r.structure, &r.render].into_iter().filter(|s| !s.is_empty());
-                let _ = writeln!(
-                    out,
-                    "worst {metric} change: {} ({}; threshold {})",
-                    fmt_change(change),
-                    what.collect::<Vec<_>>().join(" "),
-                    r.threshold.map_or("—".into(), fmt_threshold)
-                );
-            }
-        }
-        let _ = writeln!(out, "{}", if self.failed() { "FAIL" } else { "PASS" });
-        out
-    }
-}
-
-fn fmt_value(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{v:.0}")
-    } else if v.abs() >= 100.0 {
-        format!("{v:.1}")
-    } else {
-        format!("{v:.4}")
-    }
-}
-
-/// 0.15 → "15%", 1e-9 → "1e-9" (a relative tolerance).
-fn fmt_threshold(t: f64) -> String {
-    if t == 0.0 {
-        "exact".into()
-    } else if t >= 1e-3 {
-        format!("{}%", (1000.0 * t).round() / 10.0)
-    } else {
-        format!("{t:.0e}")
-    }
-}
-
-fn fmt_change(c: f64) -> String {
-    if c.is_infinite() {
-        return if c > 0.0 { "+∞".into() } else { "−∞".into() };
-    }
-    let pct = 100.0 * c;
-    if pct != 0.0 && pct.abs() < 0.01 { format!("{pct:+.1e}%") } else { format!("{pct:+.2}%") }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn thresholds_parse_from_assignments_and_toml() {
-        let mut th = Thresholds::default();
-        assert_eq!(th.get("render"), 0.15);
-        th.apply_assignment("render=0.3").unwrap();
-        assert_eq!(th.get("render"), 0.3);
-        th.apply_toml("build = 0.4\nsteps_per_ray = 0\ntiming_floor_ms = 2").unwrap();
-        assert_eq!((th.get("build"), th.get("steps_per_ray"), th.get("timing_floor_ms")), (0.4, 0.0, 2.0));
-        assert!(matches!(th.apply_assignment("speed=1"), Err(ThresholdError::UnknownMetric { .. })));
-        assert!(matches!(th.apply_assignment("render"), Err(ThresholdError::Syntax(_))));
-        assert!(matches!(th.apply_assignment("render=-1"), Err(ThresholdError::BadValue { .. })));
-        assert!(matches!(th.apply_toml("render = \"x\""), Err(ThresholdError::Toml(_))));
-    }
 
     #[test]
     fn relative_changes_handle_zero_bases() {
         assert_eq!(relative_change(0.0, 0.0), 0.0);
         assert_eq!(relative_change(3.0, 0.0), f64::INFINITY);
         assert_eq!(relative_change(2.0, 1.0), 1.0);
-    }
-
-    #[test]
-    fn thresholds_print_as_percentages_or_tolerances() {
-        assert_eq!(fmt_threshold(0.15), "15%");
-        assert_eq!(fmt_threshold(0.125), "12.5%");
-        assert_eq!(fmt_threshold(1e-9), "1e-9");
-        assert_eq!(fmt_threshold(0.0), "exact");
     }
 
     #[test]
