@@ -1,5 +1,5 @@
-//! The command line (DESIGN.md §7): `run` (the default), `list`; presets fill in whatever the
-//! user does not say.
+//! The command line (DESIGN.md §7): `run` (the default), `compare`, `merge`, `report`, `list`;
+//! presets fill in whatever the user does not say.
 
 use std::path::PathBuf;
 
@@ -26,6 +26,19 @@ pub struct Cli {
 pub enum Command {
     /// Build and time every (scene, structure, backend) of the matrix; write results and a report.
     Run(Box<RunArgs>),
+    /// Compare a run with a baseline: per case the change in every metric; exit status 1 when any
+    /// metric regressed beyond its threshold or a baseline case is missing, 2 on a usage or I/O error.
+    Compare(CompareArgs),
+    /// Merge runs from several machines into one result file and report, each case tagged with its
+    /// machine.
+    Merge(MergeArgs),
+    /// Rewrite a run's report.md and report.html from its results.json (after the report code
+    /// changed, or for a results.json copied from elsewhere).
+    Report {
+        /// The run directory (holding results.json and images/).
+        #[arg(value_name = "RUN")]
+        run: PathBuf,
+    },
     /// List scenes, structures, backends or presets.
     List {
         #[arg(value_enum, default_value_t = ListWhat::All)]
@@ -46,7 +59,9 @@ pub enum ListWhat {
 pub enum Preset {
     /// A few small scenes at 256×256: a smoke test in seconds.
     Quick,
-    /// Every built-in scene except the two largest dragons, at 256×256: small enough for CI.
+    /// Every built-in scene except the two largest dragons, at 256×256, on one worker thread:
+    /// small enough for CI, and timing ratios that do not depend on how many cores a shared runner
+    /// leaves free (the baseline of `harness compare` in `.ci/run`).
     Ci,
     /// Every built-in scene at 512×512, every structure.
     Default,
@@ -105,7 +120,7 @@ pub struct RunArgs {
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
-    /// Worker threads for builds and renders (default: all logical cores).
+    /// Worker threads for builds and renders (default: all logical cores; 1 for the ci preset).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Timed repetitions per build and per render (at least 5 for results that count).
@@ -114,10 +129,11 @@ pub struct RunArgs {
     /// Untimed warm-up repetitions before the timed ones.
     #[arg(long)]
     pub warmup: Option<u32>,
-    /// Voxel structures (svo-naive, svo, esvo): resolution 2^L per axis (sets voxel.levels;
-    /// default 10, quick/ci presets 7).
-    #[arg(long, value_name = "L")]
-    pub levels: Option<u32>,
+    /// Voxel structures (svo-naive, svo, esvo): resolution 2^L per axis; a list (e.g. 8,10,12)
+    /// measures each voxel structure once per level, for the report's scaling plots. Overrides
+    /// voxel.levels (default 10; presets: quick and ci 7, default 9).
+    #[arg(long, value_name = "L,...", value_delimiter = ',')]
+    pub levels: Vec<u32>,
     /// ESVO: fit, store and intersect contours (sets esvo.contours; default on).
     #[arg(long, value_parser = ["on", "off"])]
     pub contours: Option<String>,
@@ -148,6 +164,43 @@ pub struct RunArgs {
     pub allow_unoptimized: bool,
 }
 
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// The new run: a run directory (holding results.json) or a results.json file.
+    #[arg(value_name = "NEW")]
+    pub new: PathBuf,
+    /// The baseline, likewise.
+    #[arg(value_name = "BASE")]
+    pub base: PathBuf,
+    /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2.
+    /// Overrides --thresholds. Metrics and defaults: bytes, components, nodes, pointers 1e-9;
+    /// triangles, hit_mismatches, prim_mismatches exact; steps_per_ray, visits_per_ray,
+    /// tests_per_ray, hit_fraction 1e-6; render, build, render_geomean, build_geomean 0.15 (ratios
+    /// to the reference); render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter
+    /// times are shown, not gated).
+    #[arg(long = "threshold", value_name = "METRIC=FRACTION")]
+    pub thresholds: Vec<String>,
+    /// TOML file of `metric = fraction` lines (see .ci/thresholds.toml).
+    #[arg(long = "thresholds", value_name = "FILE")]
+    pub threshold_file: Option<PathBuf>,
+    /// Print every compared metric, not only those that changed beyond their threshold.
+    #[arg(long)]
+    pub all: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// Run directories (or results.json files) to merge, e.g. one from a GPU box and one from a laptop.
+    #[arg(value_name = "RUN", required = true, num_args = 2..)]
+    pub runs: Vec<PathBuf>,
+    /// Where to write the merged results.json, report.md, report.html and images/.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Machine tags, one per run in order (default: each run's hostname, made unique).
+    #[arg(long = "tag", value_name = "NAME")]
+    pub tags: Vec<String>,
+}
+
 /// Everything a run needs, with presets applied.
 #[derive(Debug, Clone)]
 pub struct Plan {
@@ -163,6 +216,8 @@ pub struct Plan {
     pub reps: u32,
     /// Structure parameters: the preset's, then the user's (later entries win).
     pub params: Vec<String>,
+    /// Voxel levels to sweep (`--levels`); empty: the one `voxel.levels` of `params`.
+    pub levels: Vec<u32>,
 }
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
@@ -217,6 +272,16 @@ impl Preset {
         list.into_iter().map(String::from).collect()
     }
 
+    /// Worker threads the preset asks for; `None`: all logical cores. The ci preset runs on one:
+    /// a parallel reference timed against a serial build would otherwise swing with the cores
+    /// another tenant leaves free, and `harness compare` gates on such ratios.
+    fn threads(self) -> Option<usize> {
+        match self {
+            Preset::Ci => Some(1),
+            _ => None,
+        }
+    }
+
     fn size(self) -> (u32, u32) {
         match self {
             Preset::Quick | Preset::Ci => (256, 256),
@@ -228,12 +293,9 @@ impl Preset {
 }
 
 impl RunArgs {
-    /// The voxel flags as parameters (after the preset's, before the user's `--param`).
+    /// The ESVO flags as parameters (after the preset's, before the user's `--param`).
     fn voxel_flags(&self) -> Vec<String> {
         let mut out = Vec::new();
-        if let Some(l) = self.levels {
-            out.push(format!("voxel.levels={l}"));
-        }
         for (key, value) in
             [("esvo.contours", &self.contours), ("esvo.attributes", &self.attributes), ("esvo.beam", &self.beam)]
         {
@@ -268,7 +330,10 @@ impl RunArgs {
                 .collect(),
             width: self.width.unwrap_or(w),
             height: self.height.unwrap_or(h),
-            threads: self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
+            threads: self
+                .threads
+                .or(preset.threads())
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
             params: preset
@@ -278,6 +343,7 @@ impl RunArgs {
                 .chain(self.voxel_flags())
                 .chain(self.params.iter().cloned())
                 .collect(),
+            levels: self.levels.clone(),
         }
     }
 }

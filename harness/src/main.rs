@@ -3,8 +3,10 @@
 mod agreement;
 mod alloc;
 mod cli;
+mod compare;
 mod images;
 mod machine;
+mod merge;
 mod output;
 mod run;
 
@@ -24,6 +26,20 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => run::run(&cli.run, command),
         Some(Command::Run(args)) => run::run(&args, command),
+        Some(Command::Compare(args)) => {
+            // 0: no regression; 1: a regression or a missing case; 2: usage or I/O error (as clap's).
+            return match compare::compare(&args) {
+                Ok(true) => ExitCode::SUCCESS,
+                Ok(false) => ExitCode::from(1),
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        Some(Command::Merge(args)) => merge::merge(&args, command),
+        Some(Command::Report { run }) => output::read_results(&run)
+            .and_then(|(dir, results)| output::write_results(&dir, &results, &mut Default::default())),
         Some(Command::List { what }) => {
             list(what);
             Ok(())
@@ -58,7 +74,7 @@ fn list(what: ListWhat) {
     if all || what == ListWhat::Presets {
         println!("presets:");
         println!("  quick      bunny, teapot, dragon-11k, menger, flat at 256×256");
-        println!("  ci         every built-in scene but dragon and dragon-203k, at 256×256");
+        println!("  ci         every built-in scene but dragon and dragon-203k, at 256×256, one thread (the CI gate)");
         println!("  default    every built-in scene at 512×512, every structure (the default)");
         println!("  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on grass-1k…100k");
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");

@@ -1,7 +1,8 @@
-//! Where a run's files go. Every finished case is appended to `cases.jsonl` and `results.json`
-//! and `report.md` are rewritten (each through a temporary file and a rename), so a crash loses
-//! only the case in flight and never leaves a half-written file.
+//! Where a run's files go. Every finished case is appended to `cases.jsonl`, and `results.json`,
+//! `report.md` and `report.html` are rewritten (each through a temporary file and a rename), so a
+//! crash loses only the case in flight and never leaves a half-written file.
 
+use std::collections::BTreeMap;
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,6 +14,8 @@ pub struct RunOutput {
     pub dir: PathBuf,
     pub results: Results,
     jsonl: File,
+    /// The images already written, as data URIs for report.html: each PNG is read and encoded once.
+    images: BTreeMap<String, String>,
 }
 
 impl RunOutput {
@@ -34,7 +37,7 @@ impl RunOutput {
             .truncate(true)
             .open(&jsonl_path)
             .with_context(|| format!("creating {}", jsonl_path.display()))?;
-        let mut run = Self { dir, results, jsonl };
+        let mut run = Self { dir, results, jsonl, images: BTreeMap::new() };
         run.write_summary()?;
         Ok(run)
     }
@@ -53,12 +56,42 @@ impl RunOutput {
     }
 
     fn write_summary(&mut self) -> Result<()> {
-        write_atomic(&self.dir.join("results.json"), &serde_json::to_vec_pretty(&self.results)?)?;
-        write_atomic(&self.dir.join("report.md"), reports::markdown::report(&self.results).as_bytes())
+        write_results(&self.dir, &self.results, &mut self.images)
     }
 }
 
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Writes `results.json`, `report.md` and `report.html` into `dir`. `images` caches the data URIs
+/// of the images under `dir` that the cases name; an image not on disk is left out of the page.
+pub fn write_results(dir: &Path, results: &Results, images: &mut BTreeMap<String, String>) -> Result<()> {
+    write_atomic(&dir.join("results.json"), &serde_json::to_vec_pretty(results)?)?;
+    write_atomic(&dir.join("report.md"), reports::markdown::report(results).as_bytes())?;
+    for path in results.cases.iter().flat_map(|c| &c.images) {
+        if !images.contains_key(path)
+            && let Ok(png) = fs::read(dir.join(path))
+        {
+            images.insert(path.clone(), reports::html::png_data_uri(&png));
+        }
+    }
+    write_atomic(&dir.join("report.html"), reports::html::report(results, images).as_bytes())
+}
+
+/// Reads a result file: `path` is a run directory holding `results.json`, or the file itself.
+/// Returns the run directory (where its images are) with the results.
+pub fn read_results(path: &Path) -> Result<(PathBuf, Results)> {
+    let (dir, file) = if path.is_dir() {
+        (path.to_path_buf(), path.join("results.json"))
+    } else {
+        (path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf), path.to_path_buf())
+    };
+    let text = fs::read_to_string(&file).with_context(|| format!("reading {}", file.display()))?;
+    let results: Results = serde_json::from_str(&text).with_context(|| format!("parsing {}", file.display()))?;
+    if results.schema != reports::SCHEMA {
+        anyhow::bail!("{} has schema '{}', not {}", file.display(), results.schema, reports::SCHEMA);
+    }
+    Ok((dir, results))
+}
+
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_extension("tmp");
     fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
     fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))

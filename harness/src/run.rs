@@ -40,11 +40,13 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         git: machine::git(),
         settings: settings(&plan, &params, command),
         cases: Vec::new(),
+        merged: Vec::new(),
     };
     let mut out = RunOutput::create(args.out.as_deref(), &args.results_dir, results)?;
     eprintln!("accel-bench: writing {}", out.dir.display());
 
-    let cases = (plan.scenes.len() * plan.structures.len()) as u64;
+    let cases = plan.scenes.len() as u64
+        * plan.structures.iter().map(|s| variants(&plan, &params, s).len() as u64).sum::<u64>();
     let bar = ProgressBar::new(cases).with_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases  {wide_msg}")
             .context("progress template")?,
@@ -59,11 +61,13 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
             let load_ms = ms_since(t);
             let mut ctx = SceneRun::new(&scene, load_ms);
             for structure in &plan.structures {
-                let case = measure_case(&mut ctx, structure, &params, &plan, args, &out, &bar)
-                    .with_context(|| format!("scene '{scene_name}', structure '{structure}'"))?;
-                bar.suspend(|| eprintln!("{}", one_line(&case)));
-                out.push_case(case)?;
-                bar.inc(1);
+                for params in variants(&plan, &params, structure) {
+                    let case = measure_case(&mut ctx, structure, &params, &plan, args, &out, &bar)
+                        .with_context(|| format!("scene '{scene_name}', structure '{structure}'"))?;
+                    bar.suspend(|| eprintln!("{}", one_line(&case)));
+                    out.push_case(case)?;
+                    bar.inc(1);
+                }
             }
         }
         Ok(())
@@ -76,6 +80,17 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         out.dir.display()
     );
     Ok(())
+}
+
+/// The parameter sets one structure is measured with: one per `--levels` entry for a voxel
+/// structure, otherwise just the run's.
+fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<Params> {
+    let voxel = kernels::find_structure(structure).is_some_and(|e| e.family == "voxel");
+    if voxel && !plan.levels.is_empty() {
+        plan.levels.iter().map(|&l| params.with("voxel.levels", l)).collect()
+    } else {
+        vec![params.clone()]
+    }
 }
 
 /// Refuses to time a build without optimisation unless told to (DESIGN.md §1).
@@ -139,12 +154,16 @@ fn backend_name(b: Backend) -> &'static str {
     }
 }
 
-/// Per-scene state shared by its cases: the triangle soup and the reference's primary frame.
+/// Per-scene state shared by its cases: the triangle soup, the reference structure and its
+/// primary frame.
 struct SceneRun<'a> {
     scene: &'a Scene,
     triangles: Arc<[Triangle]>,
     load_ms: f64,
     degenerate: u64,
+    /// The reference structure, once built: every other structure's renders are timed in
+    /// alternation with its renders (paired timing, DESIGN.md §8).
+    reference: Option<Box<dyn Accel>>,
     /// The reference structure's primary frame, once rendered.
     reference_frame: Option<Frame>,
 }
@@ -156,6 +175,7 @@ impl<'a> SceneRun<'a> {
             triangles: scene.triangles(),
             load_ms,
             degenerate: scene.mesh.degenerate_count() as u64,
+            reference: None,
             reference_frame: None,
         }
     }
@@ -174,7 +194,18 @@ fn measure_case(
     let scene = ctx.scene;
     bar.set_message(format!("{}/{structure}: building", scene.name));
     let input = BuildInput { scene, triangles: ctx.triangles.clone(), params };
-    let (accel, build) = timed_builds(entry, &input, plan)?;
+    // Every structure but the reference is timed in alternation with the reference, so that
+    // `harness compare` can gate on ratios that machine load cancels out of.
+    let paired = if structure == REFERENCE {
+        None
+    } else {
+        if ctx.reference.is_none() {
+            bar.set_message(format!("{}/{structure}: building the reference", scene.name));
+            ctx.reference = Some(build_reference(&input)?);
+        }
+        kernels::find_structure(REFERENCE)
+    };
+    let (accel, build) = timed_builds(entry, paired, &input, plan)?;
     let memory = accel.memory();
     let mut case = Case {
         scene: scene.name.clone(),
@@ -184,7 +215,7 @@ fn measure_case(
         scene_load_ms: ctx.load_ms,
         structure: structure.into(),
         params: accel.params(),
-        resolution: None,
+        resolution: accel.resolution(),
         build,
         memory: MemoryStats {
             bytes: memory.total_bytes(),
@@ -194,6 +225,7 @@ fn measure_case(
         },
         render: Vec::new(),
         images: Vec::new(),
+        machine: None,
     };
     let camera = Camera::new(scene.camera_spec(), plan.width, plan.height);
     let shade = ShadeContext::for_scene(scene, args.seed);
@@ -206,13 +238,20 @@ fn measure_case(
                 backend_name(backend)
             ));
             let device = &out.results.machine.cpu;
-            let (mut stats, frame, heat) = timed_renders(accel.as_ref(), &camera, &shade, workload, plan, device);
+            let reference = paired.and(ctx.reference.as_deref());
+            let (mut stats, frame, heat) =
+                timed_renders(accel.as_ref(), reference, &camera, &shade, workload, plan, device);
             if workload == Workload::Primary {
                 bar.set_message(format!("{}/{structure}: checking against the reference", scene.name));
                 stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
             }
             if !args.no_images {
-                let stem = format!("{}__{structure}__{}__{}", scene.name, backend_name(backend), workload.name());
+                // Voxel cases of a level sweep differ only in their resolution.
+                let label = match case.resolution {
+                    Some(r) => format!("{structure}-{r}"),
+                    None => structure.to_string(),
+                };
+                let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
                 case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, &heat)?);
             }
             if structure == REFERENCE && workload == Workload::Primary && ctx.reference_frame.is_none() {
@@ -221,16 +260,40 @@ fn measure_case(
             case.render.push(stats);
         }
     }
+    if structure == REFERENCE {
+        ctx.reference = Some(accel);
+    }
     Ok(case)
 }
 
-/// Builds `warmup + reps` times; times the last `reps`; keeps the last structure.
-fn timed_builds(entry: &StructureEntry, input: &BuildInput, plan: &Plan) -> Result<(Box<dyn Accel>, BuildStats)> {
+/// Builds the reference structure, untimed.
+fn build_reference(input: &BuildInput) -> Result<Box<dyn Accel>> {
+    kernels::build_structure(REFERENCE, input)
+        .context("the reference structure exists")?
+        .context("building the reference")
+}
+
+/// Builds `warmup + reps` times; times the last `reps`; keeps the last structure. With a
+/// `reference`, each rep first builds (and times) the reference, so both see the same load.
+fn timed_builds(
+    entry: &StructureEntry,
+    reference: Option<&StructureEntry>,
+    input: &BuildInput,
+    plan: &Plan,
+) -> Result<(Box<dyn Accel>, BuildStats)> {
     let mut samples = Vec::new();
+    let mut reference_samples = Vec::new();
     let mut peak = 0usize;
     let mut built: Option<Box<dyn Accel>> = None;
     for i in 0..plan.warmup + plan.reps {
         drop(built.take());
+        if let Some(reference) = reference {
+            let t = Instant::now();
+            drop((reference.build)(input)?);
+            if i >= plan.warmup {
+                reference_samples.push(ms_since(t));
+            }
+        }
         let base = alloc::reset_peak();
         let t = Instant::now();
         let s = (entry.build)(input)?;
@@ -242,12 +305,19 @@ fn timed_builds(entry: &StructureEntry, input: &BuildInput, plan: &Plan) -> Resu
         built = Some(s);
     }
     let accel = built.context("no build ran")?;
-    Ok((accel, BuildStats { timing: Timing::from_samples(&samples), peak_bytes: peak as u64 }))
+    let build = BuildStats {
+        timing: Timing::from_samples(&samples),
+        peak_bytes: peak as u64,
+        reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
+    };
+    Ok((accel, build))
 }
 
-/// Renders `warmup + reps` times without counters (timed), then once with counters.
+/// Renders `warmup + reps` times without counters (timed), then once with counters. With a
+/// `reference`, each rep first renders (and times) the same rays through the reference.
 fn timed_renders(
     accel: &dyn Accel,
+    reference: Option<&dyn Accel>,
     camera: &Camera,
     shade: &ShadeContext,
     workload: Workload,
@@ -255,8 +325,16 @@ fn timed_renders(
     device: &str,
 ) -> (RenderStats, Frame, Vec<f32>) {
     let mut samples = Vec::new();
+    let mut reference_samples = Vec::new();
     let mut frame = None;
     for i in 0..plan.warmup + plan.reps {
+        if let Some(reference) = reference {
+            let t = Instant::now();
+            drop(render::render(reference, camera, shade, workload));
+            if i >= plan.warmup {
+                reference_samples.push(ms_since(t));
+            }
+        }
         let t = Instant::now();
         let f = render::render(accel, camera, shade, workload);
         let ms = ms_since(t);
@@ -286,6 +364,7 @@ fn timed_renders(
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),
         agreement: None,
+        reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
     };
     (stats, frame, heat)
 }
@@ -303,11 +382,14 @@ fn check_agreement(
         return Ok(agreement::against_brute_force(frame, camera, &ctx.triangles));
     }
     if ctx.reference_frame.is_none() {
-        // The reference is not in this run's matrix: build and render it, untimed.
-        let input = BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params };
-        let reference = kernels::build_structure(REFERENCE, &input).context("the reference structure exists")??;
+        // The reference has not rendered this scene's primary rays: render them, untimed.
+        if ctx.reference.is_none() {
+            let input = BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params };
+            ctx.reference = Some(build_reference(&input)?);
+        }
+        let reference = ctx.reference.as_deref().context("reference structure")?;
         let shade = ShadeContext::for_scene(ctx.scene, 0);
-        ctx.reference_frame = Some(render::render(reference.as_ref(), camera, &shade, Workload::Primary));
+        ctx.reference_frame = Some(render::render(reference, camera, &shade, Workload::Primary));
     }
     let reference = ctx.reference_frame.as_ref().context("reference frame")?;
     Ok(agreement::against_frame(frame, reference, REFERENCE))
@@ -324,10 +406,14 @@ fn one_line(case: &Case) -> String {
             )
         })
         .collect();
+    let structure = match case.resolution {
+        Some(r) => format!("{} {r}³", case.structure),
+        None => case.structure.clone(),
+    };
     format!(
-        "  {:<12} {:<6} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",
+        "  {:<12} {:<14} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",
         case.scene,
-        case.structure,
+        structure,
         case.triangles,
         case.build.timing.ms_median,
         case.memory.bytes as f64 / (1u64 << 20) as f64,

@@ -1,10 +1,25 @@
-//! The harness end to end: a tiny run writes results.json, cases.jsonl, report.md and images; a
-//! bad scene stops the run with a clear error but keeps the cases already measured.
+//! The harness end to end: a tiny run writes results.json, cases.jsonl, report.md, report.html and
+//! images; a bad scene stops the run with a clear error but keeps the cases already measured;
+//! `compare` passes a rerun, even on a loaded machine, and fails doctored memory; `merge` tags
+//! each machine's cases.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// One harness at a time: the tests' timings (and the loaded-machine test's load) stay their own.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn turn() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 fn harness(args: &[&str]) -> Output {
+    let _turn = turn();
+    harness_in_turn(args)
+}
+
+/// Runs the harness; the caller holds the turn.
+fn harness_in_turn(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_harness")).args(args).output().expect("the harness runs")
 }
 
@@ -71,6 +86,10 @@ fn a_run_writes_results_report_and_images() {
     assert_eq!(jsonl.lines().count(), 2);
     let report = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(report.contains("## teapot") && report.contains("## flat"));
+    let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
+    assert!(html.contains("<h2>teapot</h2>") && html.contains("<svg"));
+    assert_eq!(html.matches("src=\"data:image/png;base64,").count(), 8, "2 scenes × 2 workloads × 2 images");
+    assert!(!html.contains("http://") && !html.contains("https://"));
     for case in cases {
         for img in case["images"].as_array().expect("images") {
             let path = out.join(img.as_str().expect("path"));
@@ -117,4 +136,116 @@ fn list_names_every_builtin_scene() {
     for scene in ["bunny", "dragon-203k", "grass-10k", "stadium", "room"] {
         assert!(text.lines().any(|l| l.trim() == scene), "{scene} missing from:\n{text}");
     }
+}
+
+/// Runs `harness run` on a small matrix into `dir`; single-threaded, as the ci preset, so that
+/// the timing ratios do not depend on free cores. The caller holds the turn.
+fn small_run_in_turn(dir: &Path) {
+    let out = dir.to_string_lossy().into_owned();
+    let matrix = "run --scenes teapot,dragon-11k --structures bvh,org --width 128 --height 128 --reps 5 --threads 1";
+    let mut args: Vec<&str> = matrix.split_whitespace().collect();
+    args.extend(["--out", &out]);
+    let o = harness_in_turn(&args);
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn small_run(dir: &Path) {
+    let _turn = turn();
+    small_run_in_turn(dir);
+}
+
+fn compare(new: &Path, base: &Path) -> Output {
+    harness(&["compare", &new.to_string_lossy(), &base.to_string_lossy()])
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn compare_passes_a_rerun_and_fails_doubled_memory() {
+    let dir = temp_dir("compare");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    small_run(&a);
+    small_run(&b);
+    let o = compare(&b, &a);
+    assert_eq!(o.status.code(), Some(0), "a rerun passes:\n{}", stdout(&o));
+    assert!(stdout(&o).ends_with("PASS\n"));
+
+    // A doctored copy of the rerun: org's memory doubled on one scene.
+    let mut doctored = read_json(&b.join("results.json"));
+    let org = doctored["cases"].as_array_mut().expect("cases").iter_mut().find(|c| c["structure"] == "org");
+    let org = org.expect("an org case");
+    org["memory"]["bytes"] = serde_json::json!(org["memory"]["bytes"].as_u64().expect("bytes") * 2);
+    let bad = dir.join("doctored.json");
+    std::fs::write(&bad, serde_json::to_string(&doctored).expect("json")).expect("write");
+    let o = compare(&bad, &a);
+    assert_eq!(o.status.code(), Some(1), "doubled memory fails:\n{}", stdout(&o));
+    let row = stdout(&o).lines().find(|l| l.contains("REGRESSION")).map(String::from).unwrap_or_default();
+    assert!(
+        row.contains("teapot") && row.contains("org") && row.contains("bytes") && row.contains("+100.00%"),
+        "{row}"
+    );
+
+    // A missing baseline or an unknown metric is a usage error.
+    let o = compare(&b, &dir.join("nowhere"));
+    assert_eq!(o.status.code(), Some(2));
+    let o = harness(&["compare", &b.to_string_lossy(), &a.to_string_lossy(), "--threshold", "speed=0.1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown metric 'speed'"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A CPU hog in a second process, stopped when dropped.
+struct Hog(std::process::Child);
+
+impl Drop for Hog {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn compare_is_not_fooled_by_a_loaded_machine() {
+    let dir = temp_dir("loaded");
+    let (quiet, loaded) = (dir.join("quiet"), dir.join("loaded"));
+    small_run(&quiet);
+    {
+        let _turn = turn();
+        let _hog = Hog(Command::new("sh").args(["-c", "while :; do :; done"]).spawn().expect("start a CPU hog"));
+        small_run_in_turn(&loaded);
+    }
+    let o = compare(&loaded, &quiet);
+    assert_eq!(o.status.code(), Some(0), "timing ratios survive the load:\n{}", stdout(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn merge_tags_each_machines_cases() {
+    let dir = temp_dir("merge");
+    let (a, b, m) = (dir.join("a"), dir.join("b"), dir.join("merged"));
+    for run in [&a, &b] {
+        let out = run.to_string_lossy().into_owned();
+        let mut args = vec!["run", "--scenes", "teapot", "--structures", "bvh", "--out", &out];
+        args.extend_from_slice(TINY);
+        assert!(harness(&args).status.success());
+    }
+    let (a_arg, b_arg, m_arg) = (a.to_string_lossy(), b.to_string_lossy(), m.to_string_lossy());
+    let o = harness(&["merge", &a_arg, &b_arg, "--tag", "gpu-box", "--tag", "laptop", "--out", &m_arg]);
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+    let merged = read_json(&m.join("results.json"));
+    let cases = merged["cases"].as_array().expect("cases");
+    let tags: Vec<&str> = cases.iter().filter_map(|c| c["machine"].as_str()).collect();
+    assert_eq!(tags, ["gpu-box", "laptop"]);
+    assert_eq!(merged["merged"].as_array().map(Vec::len), Some(2));
+    let image = cases[1]["images"][0].as_str().expect("an image");
+    assert!(image.starts_with("images/laptop/") && m.join(image).exists(), "{image}");
+    let html = std::fs::read_to_string(m.join("report.html")).expect("report.html");
+    assert!(html.contains("bvh @ gpu-box") && html.contains("bvh @ laptop"));
+    // A merged file compares with itself.
+    assert_eq!(compare(&m, &m).status.code(), Some(0));
+    let o = harness(&["merge", &a_arg, &b_arg, "--tag", "one", "--out", &m_arg]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--tag"));
+    let _ = std::fs::remove_dir_all(&dir);
 }

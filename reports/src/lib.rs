@@ -1,9 +1,15 @@
-//! Results and reports (DESIGN.md §8): the `accel-bench/1` schema shared by the harness and the
-//! report writers, the Markdown report, and PNG images.
+//! Results and reports (DESIGN.md §7–8): the `accel-bench/1` schema shared by the harness and the
+//! report writers; the Markdown and self-contained HTML reports with their plots, scaling studies
+//! and paper reproductions; PNG images; and the pure logic of `harness compare` and `harness merge`.
 
+pub mod compare;
+pub mod html;
 pub mod images;
 pub mod markdown;
+pub mod merge;
 pub mod paper;
+pub mod plots;
+pub mod scaling;
 pub mod schema;
 
 pub use schema::*;

@@ -1,32 +1,53 @@
-//! `report.md`: the run's header and one summary table per scene.
+//! `report.md` (DESIGN.md §8): the run's header, the paper reproductions, the scaling exponents
+//! and one summary table per scene. `report.html` (see [`crate::html`]) adds the charts.
 
 use std::fmt::Write;
 
+use crate::merge;
+use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results};
 
 /// Renders the whole report. Scenes appear in the order their first case ran.
 pub fn report(results: &Results) -> String {
     let mut out = String::new();
-    header(&mut out, results);
-    let mut scenes: Vec<&str> = Vec::new();
-    for case in &results.cases {
-        if !scenes.contains(&case.scene.as_str()) {
-            scenes.push(&case.scene);
+    let _ = writeln!(out, "# accel-bench report\n");
+    let _ = writeln!(out, "- run `{}`, started {}", results.run_id, results.created);
+    let views = merge::views(results);
+    for (tag, view) in &views {
+        if let Some(tag) = tag {
+            let _ = writeln!(out, "- **{tag}** (run `{}`):", view.run_id);
         }
+        let mut lines = String::new();
+        header(&mut lines, view);
+        let indent = if tag.is_some() { "  " } else { "" };
+        lines.lines().for_each(|l| {
+            let _ = writeln!(out, "{indent}{l}");
+        });
     }
-    out.push_str(&crate::paper::section(results));
-    for scene in scenes {
-        let cases: Vec<&Case> = results.cases.iter().filter(|c| c.scene == scene).collect();
-        scene_section(&mut out, &cases);
+    let _ = writeln!(
+        out,
+        "\nTimes are medians over the timed reps (min–max in brackets). N_c counts nodes or cells, N_p \
+         pointers or triangle references. Steps, visits and tests are per ray, from a separate counting \
+         pass. Agreement compares primary hits with the reference on the same pixels.\n"
+    );
+    for (tag, view) in &views {
+        let section = crate::paper::section(view);
+        if let (Some(tag), false) = (tag, section.is_empty()) {
+            let _ = writeln!(out, "Machine **{tag}**:\n");
+        }
+        out.push_str(&section);
+    }
+    scaling_section(&mut out, results);
+    for scene in results.scenes() {
+        scene_section(&mut out, &results.scene_cases(scene));
     }
     out
 }
 
+/// One run's machine, git and settings lines.
 fn header(out: &mut String, r: &Results) {
     let m = &r.machine;
     let s = &r.settings;
-    let _ = writeln!(out, "# accel-bench report\n");
-    let _ = writeln!(out, "- run `{}`, started {}", r.run_id, r.created);
     let _ = writeln!(out, "- git `{}`{}", r.git.commit, if r.git.dirty { " (uncommitted changes)" } else { "" });
     let _ = writeln!(
         out,
@@ -50,13 +71,28 @@ fn header(out: &mut String, r: &Results) {
         s.workloads.join(", "),
         s.build_profile
     );
-    let _ = writeln!(out, "- command: `{}`\n", s.command);
-    let _ = writeln!(
-        out,
-        "Times are medians over the timed reps (min–max in brackets). N_c counts nodes or cells, N_p \
-         pointers or triangle references. Steps, visits and tests are per ray, from a separate counting \
-         pass. Agreement compares primary hits with the reference on the same pixels.\n"
-    );
+    let _ = writeln!(out, "- command: `{}`", s.command);
+}
+
+/// The fitted exponent of every scaling study (the plots are in report.html).
+fn scaling_section(out: &mut String, results: &Results) {
+    let studies = scaling::studies(results);
+    if studies.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Scaling\n");
+    let _ = writeln!(out, "Exponent k of y ∝ x^k, least squares on log–log (1 = linear); plots in report.html.\n");
+    let _ = writeln!(out, "| study | structure | points | k |\n|---|---|---:|---:|");
+    for s in &studies {
+        for series in &s.series {
+            let k = series.exponent.map_or("—".into(), |k| match s.x {
+                Axis::Triangles => format!("{k:.2}"),
+                Axis::Resolution => format!("{k:.2} (×{:.1} per level)", k.exp2()),
+            });
+            let _ = writeln!(out, "| {} | {} | {} | {k} |", s.title, series.label, series.points.len());
+        }
+    }
+    let _ = writeln!(out);
 }
 
 fn scene_section(out: &mut String, cases: &[&Case]) {
@@ -74,12 +110,16 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     for case in cases {
         let b = &case.build.timing;
+        let mut label = case.label();
+        if let Some(r) = case.resolution {
+            let _ = write!(label, " {r}³");
+        }
         for r in &case.render {
             let t = &r.timing;
             let _ = writeln!(
                 out,
                 "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
-                case.structure,
+                label,
                 r.backend,
                 r.workload,
                 case.memory.bytes as f64 / (1u64 << 20) as f64,

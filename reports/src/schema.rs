@@ -17,6 +17,21 @@ pub struct Results {
     pub git: Git,
     pub settings: Settings,
     pub cases: Vec<Case>,
+    /// Set by `harness merge` (DESIGN.md §8): the runs this file combines, one per machine tag;
+    /// each case names its run in [`Case::machine`]. Empty for a single run.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub merged: Vec<MergedRun>,
+}
+
+/// One of the runs a merged result file combines, under the tag its cases carry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MergedRun {
+    pub tag: String,
+    pub run_id: String,
+    pub created: String,
+    pub machine: Machine,
+    pub git: Git,
+    pub settings: Settings,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -74,6 +89,37 @@ pub struct Case {
     pub render: Vec<RenderStats>,
     /// Images written for this case, relative to the run directory.
     pub images: Vec<String>,
+    /// The machine tag of a merged result file (see [`Results::merged`]); `None` in a single run.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub machine: Option<String>,
+}
+
+impl Case {
+    /// How tables and plots name the case: the structure, tagged with its machine when merged.
+    pub fn label(&self) -> String {
+        match &self.machine {
+            Some(tag) => format!("{} @ {tag}", self.structure),
+            None => self.structure.clone(),
+        }
+    }
+}
+
+impl Results {
+    /// Scene names in the order their first case ran.
+    pub fn scenes(&self) -> Vec<&str> {
+        let mut scenes: Vec<&str> = Vec::new();
+        for case in &self.cases {
+            if !scenes.contains(&case.scene.as_str()) {
+                scenes.push(&case.scene);
+            }
+        }
+        scenes
+    }
+
+    /// The cases of one scene, in run order.
+    pub fn scene_cases(&self, scene: &str) -> Vec<&Case> {
+        self.cases.iter().filter(|c| c.scene == scene).collect()
+    }
 }
 
 /// Wall-clock statistics over the timed repetitions, in milliseconds.
@@ -83,6 +129,10 @@ pub struct Timing {
     pub ms_min: f64,
     pub ms_max: f64,
     pub reps: u32,
+    /// Every timed repetition in the order run, so that paired statistics (the reference's rep
+    /// `i` against this rep `i`) can be formed later.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub samples_ms: Vec<f64>,
 }
 
 impl Timing {
@@ -101,6 +151,7 @@ impl Timing {
             ms_min: s.first().copied().unwrap_or(0.0),
             ms_max: s.last().copied().unwrap_or(0.0),
             reps: n as u32,
+            samples_ms: samples.to_vec(),
         }
     }
 }
@@ -111,6 +162,11 @@ pub struct BuildStats {
     pub timing: Timing,
     /// Most heap bytes held at once during one build, above what was held before it.
     pub peak_bytes: u64,
+    /// The reference structure's build, timed in alternation with this one's reps so that both see
+    /// the same machine load; `harness compare` gates on the ratio of the two (DESIGN.md §8).
+    /// `None` for the reference itself and in files written before paired timing.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub reference_timing: Option<Timing>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -143,6 +199,10 @@ pub struct RenderStats {
     pub prim_tests_per_ray_mean: f64,
     pub hit_fraction: f64,
     pub agreement: Option<Agreement>,
+    /// The reference structure's render of the same rays, timed in alternation with this one's
+    /// reps (see [`BuildStats::reference_timing`]).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub reference_timing: Option<Timing>,
 }
 
 /// How this render's primary hits compare with a reference's on the same pixels.

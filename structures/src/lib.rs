@@ -35,6 +35,10 @@ pub trait Structure: Send + Sync {
     /// The parameters the structure was built with, resolved to their values (defaults included),
     /// so results record exactly what was measured.
     fn params(&self) -> serde_json::Value;
+    /// Voxel structures: the grid resolution `2^L` per axis; `None` for triangle structures.
+    fn resolution(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// The input of every builder.

@@ -38,6 +38,13 @@ impl Params {
         }
     }
 
+    /// A copy with `key` set to `value` (a sweep over one parameter).
+    pub fn with(&self, key: &str, value: impl ToString) -> Self {
+        let mut values = self.values.clone();
+        values.insert(key.to_string(), value.to_string());
+        Self { values }
+    }
+
     pub fn iter(&self) -> impl Iterator<Item = (&str, &str)> {
         self.values.iter().map(|(k, v)| (k.as_str(), v.as_str()))
     }

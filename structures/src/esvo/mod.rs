@@ -150,6 +150,10 @@ impl Structure for Esvo {
         "esvo"
     }
 
+    fn resolution(&self) -> Option<u64> {
+        Some(self.grid.resolution() as u64)
+    }
+
     fn memory(&self) -> MemoryReport {
         let s = &self.stats;
         // First descriptor words are the hierarchy, second words the contour lookup (§5.6).

@@ -61,6 +61,10 @@ impl Structure for Svo {
         "svo"
     }
 
+    fn resolution(&self) -> Option<u64> {
+        Some(self.grid.resolution() as u64)
+    }
+
     fn memory(&self) -> MemoryReport {
         let n = self.nodes.len() as u64;
         // N_c = interior voxels (the nodes stored), N_p = one first-child pointer per node.

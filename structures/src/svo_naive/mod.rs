@@ -65,6 +65,10 @@ impl Structure for SvoNaive {
         "svo-naive"
     }
 
+    fn resolution(&self) -> Option<u64> {
+        Some(self.grid.resolution() as u64)
+    }
+
     fn memory(&self) -> MemoryReport {
         let n = (self.blocks.len() / 8) as u64;
         // Every non-empty, non-leaf entry is a pointer.

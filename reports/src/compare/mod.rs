@@ -1,0 +1,427 @@
+//! `harness compare NEW BASE` (DESIGN.md §7–8): per (scene, structure, backend, workload) the
+//! change in every metric, judged against a per-metric threshold.
+//!
+//! Two kinds of metric, judged differently:
+//! - **Deterministic** — bytes (total and per component), N_c, N_p, triangles, steps / visits /
+//!   tests per ray, hit fraction, agreement mismatches. The CPU kernels count them exactly, so they
+//!   must match within a tiny relative tolerance; a rise is a regression, a fall an improvement (the
+//!   baseline wants refreshing), and a changed hit fraction or triangle count is a regression
+//!   either way (the picture or the scene changed).
+//! - **Timings** — never compared raw when avoidable, because a loaded machine slows everything.
+//!   A case's best (min-of-reps) time is divided by the reference BVH's best time measured in the
+//!   same run — preferably the reference reps timed in alternation with the case's own
+//!   ([`RenderStats::reference_timing`]), else the `bvh` case of the same scene — and that ratio is
+//!   compared between the runs. Per case the threshold is `render` / `build`; per structure the
+//!   geometric mean of the ratio changes over every scene (`render_geomean` / `build_geomean`)
+//!   averages the noise of single cases away. Where either run lacks a reference the raw times are
+//!   compared under the wider `render_raw` / `build_raw`, and the table says so. Times under
+//!   `timing_floor_ms` are shown but never gated: scheduler noise dominates them.
+//!
+//! A case in BASE but not in NEW fails the comparison; a case only in NEW is reported.
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+use crate::schema::{Case, RenderStats, Results, Timing};
+
+mod table;
+mod thresholds;
+
+use thresholds::{Kind, METRICS};
+pub use thresholds::{ThresholdError, Thresholds};
+
+/// The structure timings are divided by (DESIGN.md §4.5: the reference BVH).
+pub const REFERENCE: &str = "bvh";
+
+/// What a row's comparison found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Status {
+    /// Within its threshold.
+    Ok,
+    /// Shown for information, never gated (the reference's own times, times under the floor).
+    Info,
+    /// Better beyond its threshold (for deterministic metrics: refresh the baseline).
+    Improved,
+    /// A case or render only in NEW.
+    New,
+    /// Worse beyond its threshold: fails the comparison.
+    Regression,
+    /// A case or render in BASE but not in NEW: fails the comparison.
+    Missing,
+}
+
+impl Status {
+    pub fn fails(self) -> bool {
+        matches!(self, Status::Regression | Status::Missing)
+    }
+
+    fn word(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Info => "info",
+            Status::Improved => "improved",
+            Status::New => "new",
+            Status::Regression => "REGRESSION",
+            Status::Missing => "MISSING",
+        }
+    }
+}
+
+/// One compared metric of one case (or of one structure over all scenes, for the geometric means).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    pub scene: String,
+    /// The structure, with its resolution and machine tag where it has them.
+    pub structure: String,
+    /// `backend/workload` of a render metric; empty for per-case metrics.
+    pub render: String,
+    pub metric: String,
+    pub base: Option<f64>,
+    pub new: Option<f64>,
+    /// Relative change, `new / base − 1`.
+    pub change: Option<f64>,
+    pub threshold: Option<f64>,
+    pub status: Status,
+    /// What a timing was measured against, or why a row is not gated.
+    pub note: String,
+}
+
+/// The outcome of comparing NEW against BASE.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Comparison {
+    pub new_run: String,
+    pub base_run: String,
+    pub rows: Vec<Row>,
+    /// Differences in how the runs were configured that make deltas suspect.
+    pub warnings: Vec<String>,
+}
+
+/// Compares every case of `base` with the same case of `new`.
+pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Comparison {
+    let mut cmp = Comparison {
+        new_run: new.run_id.clone(),
+        base_run: base.run_id.clone(),
+        rows: Vec::new(),
+        warnings: settings_warnings(new, base),
+    };
+    let mut geo: BTreeMap<(String, String, &'static str), Vec<f64>> = BTreeMap::new();
+    for b in &base.cases {
+        let Some(n) = new.cases.iter().find(|n| same_case(n, b)) else {
+            cmp.rows.push(presence_row(b, "", Status::Missing, "case not in NEW"));
+            continue;
+        };
+        compare_case(&mut cmp.rows, &mut geo, (n, new), (b, base), thresholds);
+    }
+    for n in new.cases.iter().filter(|n| !base.cases.iter().any(|b| same_case(n, b))) {
+        cmp.rows.push(presence_row(n, "", Status::New, "case not in BASE"));
+    }
+    for ((structure, render, metric), logs) in geo {
+        if logs.len() < 2 {
+            continue;
+        }
+        let change = (logs.iter().sum::<f64>() / logs.len() as f64).exp() - 1.0;
+        let threshold = thresholds.get(metric);
+        cmp.rows.push(Row {
+            scene: format!("all {} scenes", logs.len()),
+            structure,
+            render,
+            metric: metric.into(),
+            base: None,
+            new: None,
+            change: Some(change),
+            threshold: Some(threshold),
+            status: judge_timing(change, threshold),
+            note: "geometric mean of the per-scene ratio changes".into(),
+        });
+    }
+    cmp
+}
+
+fn same_case(a: &Case, b: &Case) -> bool {
+    a.scene == b.scene && a.structure == b.structure && a.resolution == b.resolution && a.machine == b.machine
+}
+
+fn case_name(c: &Case) -> String {
+    let mut name = c.structure.clone();
+    if let Some(r) = c.resolution {
+        let _ = write!(name, " {r}³");
+    }
+    if let Some(tag) = &c.machine {
+        let _ = write!(name, " @ {tag}");
+    }
+    name
+}
+
+fn render_name(r: &RenderStats) -> String {
+    format!("{}/{}", r.backend, r.workload)
+}
+
+fn presence_row(c: &Case, render: &str, status: Status, note: &str) -> Row {
+    Row {
+        scene: c.scene.clone(),
+        structure: case_name(c),
+        render: render.into(),
+        metric: "—".into(),
+        base: None,
+        new: None,
+        change: None,
+        threshold: None,
+        status,
+        note: note.into(),
+    }
+}
+
+fn settings_warnings(new: &Results, base: &Results) -> Vec<String> {
+    let (n, b) = (&new.settings, &base.settings);
+    let mut w = Vec::new();
+    if (n.width, n.height) != (b.width, b.height) {
+        w.push(format!(
+            "image sizes differ ({}×{} vs {}×{}): per-ray metrics will differ",
+            n.width, n.height, b.width, b.height
+        ));
+    }
+    if n.params != b.params {
+        w.push("structure parameters differ: memory and per-ray metrics may differ".into());
+    }
+    if new.machine.cpu != base.machine.cpu {
+        w.push(format!(
+            "different CPUs ({} vs {}): timing ratios to the reference may shift",
+            new.machine.cpu, base.machine.cpu
+        ));
+    }
+    w
+}
+
+type Geo = BTreeMap<(String, String, &'static str), Vec<f64>>;
+
+fn compare_case(rows: &mut Vec<Row>, geo: &mut Geo, new: (&Case, &Results), base: (&Case, &Results), th: &Thresholds) {
+    let ((n, new_run), (b, base_run)) = (new, base);
+    let mut det = |metric: &str, name: String, render: String, nv: f64, bv: f64| {
+        rows.push(deterministic_row(b, render, metric, name, nv, bv, th));
+    };
+    det("triangles", "triangles".into(), String::new(), n.triangles as f64, b.triangles as f64);
+    det("bytes", "bytes".into(), String::new(), n.memory.bytes as f64, b.memory.bytes as f64);
+    for (component, &bv) in &b.memory.components {
+        let nv = n.memory.components.get(component).copied().unwrap_or(0);
+        det("components", format!("bytes[{component}]"), String::new(), nv as f64, bv as f64);
+    }
+    det("nodes", "nodes".into(), String::new(), n.memory.nodes as f64, b.memory.nodes as f64);
+    det("pointers", "pointers".into(), String::new(), n.memory.pointers as f64, b.memory.pointers as f64);
+    let build = |c: &Case, run: &Results| {
+        let reference = reference_case(run, c).map(|r| &r.build.timing);
+        TimingSide::of(&c.build.timing, c.build.reference_timing.as_ref(), reference, c.structure == REFERENCE)
+    };
+    rows.push(timing_row(geo, b, String::new(), "build", build(n, new_run), build(b, base_run), th));
+
+    for br in &b.render {
+        let name = render_name(br);
+        let Some(nr) = n.render.iter().find(|r| r.backend == br.backend && r.workload == br.workload) else {
+            rows.push(presence_row(b, &name, Status::Missing, "render not in NEW"));
+            continue;
+        };
+        let mut det = |metric: &str, nv: f64, bv: f64| {
+            rows.push(deterministic_row(b, name.clone(), metric, metric.into(), nv, bv, th));
+        };
+        det("steps_per_ray", nr.steps_per_ray_mean, br.steps_per_ray_mean);
+        det("visits_per_ray", nr.node_visits_per_ray_mean, br.node_visits_per_ray_mean);
+        det("tests_per_ray", nr.prim_tests_per_ray_mean, br.prim_tests_per_ray_mean);
+        det("hit_fraction", nr.hit_fraction, br.hit_fraction);
+        if let (Some(na), Some(ba)) = (&nr.agreement, &br.agreement) {
+            det("hit_mismatches", na.hit_mismatches as f64, ba.hit_mismatches as f64);
+            det("prim_mismatches", na.prim_mismatches as f64, ba.prim_mismatches as f64);
+        }
+        let side = |c: &Case, r: &RenderStats, run: &Results| {
+            let reference = reference_case(run, c)
+                .and_then(|rc| rc.render.iter().find(|x| x.backend == r.backend && x.workload == r.workload))
+                .map(|x| &x.timing);
+            TimingSide::of(&r.timing, r.reference_timing.as_ref(), reference, c.structure == REFERENCE)
+        };
+        rows.push(timing_row(geo, b, name.clone(), "render", side(n, nr, new_run), side(b, br, base_run), th));
+    }
+    for nr in
+        n.render.iter().filter(|nr| !b.render.iter().any(|br| br.backend == nr.backend && br.workload == nr.workload))
+    {
+        rows.push(presence_row(n, &render_name(nr), Status::New, "render not in BASE"));
+    }
+}
+
+/// The `bvh` case of `c`'s scene in the same run (same machine tag), if it ran.
+fn reference_case<'a>(run: &'a Results, c: &Case) -> Option<&'a Case> {
+    run.cases.iter().find(|r| r.structure == REFERENCE && r.scene == c.scene && r.machine == c.machine)
+}
+
+fn relative_change(new: f64, base: f64) -> f64 {
+    if new == base {
+        0.0
+    } else if base == 0.0 {
+        f64::INFINITY.copysign(new)
+    } else {
+        new / base - 1.0
+    }
+}
+
+fn deterministic_row(
+    c: &Case,
+    render: String,
+    metric: &str,
+    name: String,
+    new: f64,
+    base: f64,
+    th: &Thresholds,
+) -> Row {
+    let change = relative_change(new, base);
+    let threshold = th.get(metric);
+    let exact = METRICS.iter().any(|&(m, kind, _)| m == metric && kind == Kind::Exact);
+    let status = if change.abs() <= threshold {
+        Status::Ok
+    } else if change > 0.0 || exact {
+        Status::Regression
+    } else {
+        Status::Improved
+    };
+    let note = match status {
+        Status::Improved => "deterministic: refresh the baseline if intended",
+        _ => "deterministic",
+    };
+    Row {
+        scene: c.scene.clone(),
+        structure: case_name(c),
+        render,
+        metric: name,
+        base: Some(base),
+        new: Some(new),
+        change: Some(change),
+        threshold: Some(threshold),
+        status,
+        note: note.into(),
+    }
+}
+
+/// One run's view of a case's timing: its best time and, where there is one, the reference's.
+struct TimingSide {
+    ms_min: f64,
+    /// The reference's best time and whether it was timed in alternation with the case.
+    reference: Option<(f64, bool)>,
+    is_reference: bool,
+}
+
+impl TimingSide {
+    fn of(own: &Timing, paired: Option<&Timing>, reference_case: Option<&Timing>, is_reference: bool) -> Self {
+        let reference = match (paired, reference_case) {
+            (Some(p), _) => Some((p.ms_min, true)),
+            (None, Some(r)) if !is_reference => Some((r.ms_min, false)),
+            _ => None,
+        };
+        Self { ms_min: own.ms_min, reference, is_reference }
+    }
+
+    fn shortest_ms(&self) -> f64 {
+        self.reference.map_or(self.ms_min, |(r, _)| r.min(self.ms_min))
+    }
+}
+
+fn judge_timing(change: f64, threshold: f64) -> Status {
+    if change > threshold {
+        Status::Regression
+    } else if 1.0 / (1.0 + change) - 1.0 > threshold {
+        Status::Improved
+    } else {
+        Status::Ok
+    }
+}
+
+/// Compares one timing (`kind` is `build` or `render`) as a ratio to the reference where both runs
+/// have one, else raw.
+fn timing_row(
+    geo: &mut Geo,
+    c: &Case,
+    render: String,
+    kind: &'static str,
+    new: TimingSide,
+    base: TimingSide,
+    th: &Thresholds,
+) -> Row {
+    let floor = th.floor_ms();
+    let mut row = Row {
+        scene: c.scene.clone(),
+        structure: case_name(c),
+        render,
+        metric: String::new(),
+        base: None,
+        new: None,
+        change: None,
+        threshold: None,
+        status: Status::Ok,
+        note: String::new(),
+    };
+    let (metric, nv, bv, note): (&'static str, f64, f64, String) = match (new.reference, base.reference) {
+        (Some((nr, np)), Some((br, bp))) => {
+            let basis = match (np, bp) {
+                (true, true) => "ratio to bvh timed alongside (min of reps)",
+                _ => "ratio to this run's bvh case (min of reps)",
+            };
+            (metric_name(kind, false), new.ms_min / nr, base.ms_min / br, basis.into())
+        }
+        _ if new.is_reference => {
+            let raw = metric_name(kind, true);
+            row.metric = format!("{kind}_ms");
+            row.base = Some(base.ms_min);
+            row.new = Some(new.ms_min);
+            row.change = Some(relative_change(new.ms_min, base.ms_min));
+            row.status = Status::Info;
+            row.note =
+                format!("the reference itself: raw min-of-reps ms, not gated (threshold {raw} applies to others)");
+            return row;
+        }
+        _ => (metric_name(kind, true), new.ms_min, base.ms_min, "raw min-of-reps ms: no bvh reference in a run".into()),
+    };
+    let change = relative_change(nv, bv);
+    let threshold = th.get(metric);
+    row.metric = metric.into();
+    row.base = Some(bv);
+    row.new = Some(nv);
+    row.change = Some(change);
+    row.threshold = Some(threshold);
+    if new.shortest_ms().min(base.shortest_ms()) < floor {
+        row.status = Status::Info;
+        row.note = format!("{note}; under the {floor} ms timing floor, not gated");
+    } else {
+        row.status = judge_timing(change, threshold);
+        row.note = note;
+        if metric == kind && change.is_finite() && change > -1.0 {
+            let key =
+                (case_name(c), row.render.clone(), if kind == "build" { "build_geomean" } else { "render_geomean" });
+            geo.entry(key).or_default().push((1.0 + change).ln());
+        }
+    }
+    row
+}
+
+fn metric_name(kind: &str, raw: bool) -> &'static str {
+    match (kind, raw) {
+        ("build", false) => "build",
+        ("build", true) => "build_raw",
+        (_, false) => "render",
+        (_, true) => "render_raw",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_changes_handle_zero_bases() {
+        assert_eq!(relative_change(0.0, 0.0), 0.0);
+        assert_eq!(relative_change(3.0, 0.0), f64::INFINITY);
+        assert_eq!(relative_change(2.0, 1.0), 1.0);
+    }
+
+    #[test]
+    fn timing_judgement_is_symmetric_in_ratio() {
+        assert_eq!(judge_timing(0.1, 0.15), Status::Ok);
+        assert_eq!(judge_timing(0.2, 0.15), Status::Regression);
+        assert_eq!(judge_timing(-0.1, 0.15), Status::Ok, "1/0.9 = +11 %");
+        assert_eq!(judge_timing(-0.2, 0.15), Status::Improved, "1/0.8 = +25 %");
+    }
+}

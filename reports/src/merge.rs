@@ -1,0 +1,175 @@
+//! `harness merge` (DESIGN.md §8): runs from several machines — a GPU box and a laptop, say —
+//! combined into one result file. Every case carries its machine's tag ([`Case::machine`]), every
+//! run its machine, git and settings records ([`Results::merged`]), so one report shows them side
+//! by side and `harness compare` can still pair each case with its own machine's reference.
+
+use crate::schema::{Case, Machine, MergedRun, Results, SCHEMA};
+
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    #[error("run {run_id} has schema '{schema}', not {SCHEMA}")]
+    Schema { run_id: String, schema: String },
+    #[error("machine tag '{0}' is used twice; give distinct --tag values")]
+    DuplicateTag(String),
+    #[error("nothing to merge")]
+    Empty,
+}
+
+/// Each run's hostname, with `-2`, `-3`, … appended where hostnames repeat.
+pub fn default_tags(runs: &[Results]) -> Vec<String> {
+    let mut tags: Vec<String> = Vec::new();
+    for r in runs {
+        let host = if r.machine.hostname.is_empty() { "machine".to_string() } else { r.machine.hostname.clone() };
+        let mut tag = host.clone();
+        let mut k = 2;
+        while tags.contains(&tag) {
+            tag = format!("{host}-{k}");
+            k += 1;
+        }
+        tags.push(tag);
+    }
+    tags
+}
+
+/// Where an image of the run tagged `tag` goes in the merged run directory: `images/x.png` →
+/// `images/<tag>/x.png`.
+pub fn merged_image_path(tag: &str, path: &str) -> String {
+    format!("images/{tag}/{}", path.strip_prefix("images/").unwrap_or(path))
+}
+
+/// Merges `runs` (each with its tag) into one result file, cases in input order. A run that is
+/// itself a merge keeps its own tags and images, and the tag given for it is unused.
+pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
+    let Some((_, first)) = runs.first() else { return Err(MergeError::Empty) };
+    let mut merged = Results {
+        schema: SCHEMA.into(),
+        run_id: String::new(),
+        created: runs.iter().map(|(_, r)| r.created.clone()).max().unwrap_or_default(),
+        machine: Machine::default(),
+        git: first.git.clone(),
+        settings: first.settings.clone(),
+        cases: Vec::new(),
+        merged: Vec::new(),
+    };
+    for (tag, run) in runs {
+        if run.schema != SCHEMA {
+            return Err(MergeError::Schema { run_id: run.run_id.clone(), schema: run.schema.clone() });
+        }
+        if run.merged.is_empty() {
+            merged.merged.push(MergedRun {
+                tag: tag.clone(),
+                run_id: run.run_id.clone(),
+                created: run.created.clone(),
+                machine: run.machine.clone(),
+                git: run.git.clone(),
+                settings: run.settings.clone(),
+            });
+            merged.cases.extend(run.cases.iter().map(|c| tagged(c, tag)));
+        } else {
+            merged.merged.extend(run.merged.iter().cloned());
+            merged.cases.extend(run.cases.iter().cloned());
+        }
+    }
+    let tags: Vec<&str> = merged.merged.iter().map(|m| m.tag.as_str()).collect();
+    if let Some(dup) = tags.iter().enumerate().find(|(i, t)| tags[..*i].contains(t)).map(|(_, t)| t) {
+        return Err(MergeError::DuplicateTag(dup.to_string()));
+    }
+    merged.run_id = format!("merge-{}", tags.join("+"));
+    merged.machine = summary_machine(&merged.merged);
+    if !runs.iter().all(|(_, r)| r.settings.preset == first.settings.preset) {
+        merged.settings.preset = "merged".into();
+    }
+    Ok(merged)
+}
+
+fn tagged(case: &Case, tag: &str) -> Case {
+    Case {
+        machine: Some(tag.into()),
+        images: case.images.iter().map(|p| merged_image_path(tag, p)).collect(),
+        ..case.clone()
+    }
+}
+
+/// The top-level machine record of a merge: every tag and CPU, the largest core count and memory.
+fn summary_machine(runs: &[MergedRun]) -> Machine {
+    let join = |f: &dyn Fn(&MergedRun) -> String| runs.iter().map(f).collect::<Vec<_>>().join("; ");
+    Machine {
+        hostname: join(&|m| m.tag.clone()),
+        os: join(&|m| m.machine.os.clone()),
+        arch: join(&|m| m.machine.arch.clone()),
+        cpu: join(&|m| format!("{}: {}", m.tag, m.machine.cpu)),
+        cores: runs.iter().map(|m| m.machine.cores).max().unwrap_or(0),
+        memory_bytes: runs.iter().map(|m| m.machine.memory_bytes).max().unwrap_or(0),
+    }
+}
+
+/// The runs a result file holds, each as a stand-alone [`Results`] with its own machine, git,
+/// settings and cases: one per tag for a merge, else the file itself. Reports that only make sense
+/// on one machine (the paper reproductions) are drawn once per view.
+pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
+    if results.merged.is_empty() {
+        return vec![(None, results.clone())];
+    }
+    results
+        .merged
+        .iter()
+        .map(|m| {
+            let view = Results {
+                schema: results.schema.clone(),
+                run_id: m.run_id.clone(),
+                created: m.created.clone(),
+                machine: m.machine.clone(),
+                git: m.git.clone(),
+                settings: m.settings.clone(),
+                cases: results.cases.iter().filter(|c| c.machine.as_deref() == Some(&m.tag)).cloned().collect(),
+                merged: Vec::new(),
+            };
+            (Some(m.tag.clone()), view)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(host: &str, structure: &str) -> Results {
+        Results {
+            schema: SCHEMA.into(),
+            run_id: format!("run-{host}"),
+            machine: Machine { hostname: host.into(), cpu: format!("{host} cpu"), cores: 4, ..Machine::default() },
+            cases: vec![Case {
+                scene: "bunny".into(),
+                structure: structure.into(),
+                images: vec!["images/bunny__bvh__cpu__primary.png".into()],
+                ..Case::default()
+            }],
+            ..Results::default()
+        }
+    }
+
+    #[test]
+    fn cases_are_tagged_and_views_split_them_again() {
+        let (a, b) = (run("gpu-box", "bvh"), run("laptop", "bvh"));
+        let merged = merge(&[("gpu-box".into(), a.clone()), ("laptop".into(), b)]).unwrap();
+        assert_eq!(merged.cases.len(), 2);
+        assert_eq!(merged.cases[1].machine.as_deref(), Some("laptop"));
+        assert_eq!(merged.cases[1].label(), "bvh @ laptop");
+        assert_eq!(merged.cases[0].images, ["images/gpu-box/bunny__bvh__cpu__primary.png"]);
+        assert!(merged.machine.cpu.contains("laptop: laptop cpu"));
+        let views = views(&merged);
+        assert_eq!(views.len(), 2);
+        assert_eq!(views[0].1.machine, a.machine);
+        assert_eq!(views[0].1.cases.len(), 1);
+        let again = merge(&[("x".into(), merged.clone()), ("desk".into(), run("desk", "org"))]).unwrap();
+        assert_eq!(again.merged.len(), 3, "a merge of a merge keeps its tags");
+    }
+
+    #[test]
+    fn tags_are_unique() {
+        let runs = [run("box", "bvh"), run("box", "bvh"), run("", "bvh")];
+        assert_eq!(default_tags(&runs), ["box", "box-2", "machine"]);
+        let dup = merge(&[("a".into(), runs[0].clone()), ("a".into(), runs[1].clone())]);
+        assert!(matches!(dup, Err(MergeError::DuplicateTag(t)) if t == "a"));
+    }
+}

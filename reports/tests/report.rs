@@ -1,0 +1,129 @@
+//! Report generation on the fixture run (DESIGN.md §8): `report.md` and `report.html` carry the
+//! fixture's values, the HTML has its charts and images inline and no external reference.
+
+use std::collections::BTreeMap;
+
+use reports::html::png_data_uri;
+use reports::{Results, html, markdown, merge};
+
+fn fixture() -> Results {
+    serde_json::from_str(include_str!("fixtures/results.json")).expect("the fixture parses")
+}
+
+/// A 2×2 PNG, encoded in memory.
+fn tiny_png(rgb: [u8; 3]) -> Vec<u8> {
+    let mut png = Vec::new();
+    let pixels: Vec<u8> = rgb.repeat(4);
+    image::write_buffer_with_format(
+        &mut std::io::Cursor::new(&mut png),
+        &pixels,
+        2,
+        2,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .expect("encode a PNG");
+    png
+}
+
+/// Every image of the fixture but the dragon-48k org pair.
+fn images(results: &Results) -> BTreeMap<String, String> {
+    results
+        .cases
+        .iter()
+        .flat_map(|c| &c.images)
+        .filter(|p| !p.contains("dragon-48k__org"))
+        .map(|p| (p.clone(), png_data_uri(&tiny_png([200, 30, 30]))))
+        .collect()
+}
+
+#[test]
+fn html_tables_carry_the_fixture_values() {
+    let r = fixture();
+    let page = html::report(&r, &images(&r));
+    for want in [
+        "<h2>dragon-11k</h2>",
+        "<h2>dragon-48k</h2>",
+        "Fixture CPU 3000",
+        "0123456789abcdef0123456789abcdef01234567",
+        "11102 triangles",
+        "<td>11385</td><td>35645</td>",     // org dragon-11k N_c, N_p
+        "title=\"188188 bytes\">183.8 KiB", // org dragon-11k memory
+        "<td>3.9 [3.9–4.0]</td>",           // its build ms
+        "<td>13.43 [13.20–13.80]</td>",     // its render ms
+        "<td>9.2</td>",                     // its steps per ray
+        "<td>29.2</td>",                    // hit %
+        "brute-force, 512 px",
+        "<td>0 / 0</td>",
+        "<td>0.48</td>",   // bvh dragon-11k Mrays/s in the summary
+        "<td>371706</td>", // rg dragon-48k N_c
+        "2.45 MiB",        // rg dragon-48k memory
+        "<td>22189</td>",  // bvh dragon-48k N_c
+    ] {
+        assert!(page.contains(want), "report.html lacks {want}");
+    }
+}
+
+#[test]
+fn html_has_charts_images_and_paper_claims() {
+    let r = fixture();
+    let page = html::report(&r, &images(&r));
+    // Per scene: memory, build and render charts; then two scaling studies (build and memory).
+    assert_eq!(page.matches("<svg").count(), 2 * 3 + 2, "charts");
+    for want in [
+        "dragon-11k: memory by component",
+        "dragon-48k: render time",
+        "dragon: build time vs triangles",
+        "dragon: memory vs triangles",
+        "org (k = ",
+        "Seed 002 Fig. 2",
+        "class=\"held\"",
+        "data:image/png;base64,",
+        "image missing",
+        "org · cpu · primary",
+    ] {
+        assert!(page.contains(want), "report.html lacks {want}");
+    }
+    // Ten of the twelve images are inline; the two left out show a placeholder.
+    assert_eq!(page.matches("src=\"data:image/png;base64,").count(), 10);
+    assert_eq!(page.matches("image missing").count(), 2);
+}
+
+#[test]
+fn html_has_no_external_reference() {
+    let r = fixture();
+    let page = html::report(&r, &images(&r));
+    for banned in ["http://", "https://", "src=\"//", "href=\"//", "<script", "<link", "@import", "url("] {
+        assert!(!page.contains(banned), "report.html contains {banned}");
+    }
+    // Every link is to an anchor on the page.
+    for (i, _) in page.match_indices("href=\"") {
+        assert_eq!(&page[i + 6..i + 7], "#", "external link at {}", &page[i..(i + 60).min(page.len())]);
+    }
+}
+
+#[test]
+fn markdown_tables_carry_the_fixture_values() {
+    let md = markdown::report(&fixture());
+    let row = md.lines().find(|l| l.starts_with("| org |") && l.contains("| 11385 |")).expect("org dragon-11k row");
+    for want in ["| 0.18 |", "| 35645 |", "3.9 [3.9–4.0]", "13.43 [13.20–13.80]", "| 0.23 |", "| 9.2 |", "| 29.2 |"]
+    {
+        assert!(row.contains(want), "row lacks {want}: {row}");
+    }
+    assert!(md.contains("## Seed 002 Fig. 2"));
+    assert!(md.contains("## Scaling"));
+    assert!(md.contains("| dragon: memory vs triangles | org | 2 |"), "{md}");
+}
+
+#[test]
+fn merged_runs_are_machine_tagged_in_the_report() {
+    let (a, mut b) = (fixture(), fixture());
+    b.machine.hostname = "laptop".into();
+    let merged = merge::merge(&[("gpu-box".into(), a), ("laptop".into(), b)]).expect("merge");
+    let page = html::report(&merged, &BTreeMap::new());
+    for want in ["org @ gpu-box", "org @ laptop", "<b>laptop</b>", "Machine <b>gpu-box</b>"] {
+        assert!(page.contains(want), "merged report.html lacks {want}");
+    }
+    let md = markdown::report(&merged);
+    assert!(md.lines().any(|l| l.starts_with("| org @ laptop |")), "{md}");
+}
