@@ -32,76 +32,187 @@ pub fn build(scene: &Scene, params: EsvoParams) -> Esvo {
 }
 
 /// Per level (index = level, 1..=L; level 0 is empty), per voxel: its contour word, 0 = none.
+///
+/// Top-down, so each voxel knows the slab its ancestors already impose (cooperating contours,
+/// §5.3), and each voxel's candidate triangles are those of its parent whose bounding box meets
+/// its cube (`fit` clips exactly). The top [`SPLIT_LEVEL`] levels go level by level, in parallel
+/// over a level's voxels; below, one rayon task per voxel of that level descends depth-first: in
+/// Morton order a voxel's descendants are contiguous at every level, so each task fills its own
+/// ranges and the ranges concatenate in task order.
 fn fit_contours(scene: &Scene, tree: &Octree, max_ratio: f32) -> Vec<Vec<u32>> {
     let grid = tree.grid;
     let levels = grid.level as usize;
-    let to_octree = |p: Vec3| (p - grid.origin) / grid.size + Vec3::ONE;
-    let triangles = scene.triangles();
     if tree.is_empty() {
         return vec![Vec::new(); levels + 1];
     }
-    // Candidate (level, voxel, triangle) pairs: every set voxel whose cube meets the triangle's
-    // bounding box, found by descending the octree once per triangle. `fit` clips exactly.
-    let pairs: Vec<Vec<(u32, u32)>> = triangles
-        .par_iter()
-        .enumerate()
-        .fold(
-            || vec![Vec::new(); levels + 1],
-            |mut acc, (t, tri)| {
-                let p = tri.map(to_octree);
-                let lo = p[0].min(p[1]).min(p[2]);
-                let hi = p[0].max(p[1]).max(p[2]);
-                collect_pairs(tree, lo, hi, t as u32, &mut acc);
-                acc
-            },
-        )
-        .reduce(
-            || vec![Vec::new(); levels + 1],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    x.extend(y);
-                }
-                a
-            },
-        );
+    let to_octree = |p: Vec3| (p - grid.origin) / grid.size + Vec3::ONE;
+    let triangles: Vec<[Vec3; 3]> = scene.triangles().par_iter().map(|t| t.map(to_octree)).collect();
+    let bounds: Vec<[Vec3; 2]> =
+        triangles.par_iter().map(|p| [p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])]).collect();
     let params = FitParams { max_ratio, ..FitParams::default() };
-    // Top-down, so each voxel knows the slab its ancestors already impose (cooperating contours,
-    // §5.3): the thickness, in octree units, of the nearest ancestor's contour (∞ at the root).
-    let mut contours: Vec<Vec<u32>> = vec![Vec::new()];
-    let mut inherited: Vec<f32> = vec![f32::INFINITY];
-    for (level, mut pairs) in pairs.into_iter().enumerate().skip(1) {
-        pairs.par_sort_unstable();
-        let n = tree.levels[level].len();
-        let side = (-(level as f32)).exp2();
-        let parent_inherited = expand_to_children(tree, level - 1, &inherited);
-        let mut starts: Vec<usize> = (0..pairs.len()).filter(|&k| k == 0 || pairs[k].0 != pairs[k - 1].0).collect();
-        starts.push(pairs.len());
-        let fitted: Vec<(u32, u32, f32)> = starts
-            .par_windows(2)
-            .filter_map(|w| {
-                let voxel = pairs[w[0]].0;
-                // "Store one only where it tightens the bound meaningfully": not where an
-                // ancestor's slab already pins the surface to a fraction of this voxel.
-                if parent_inherited[voxel as usize] <= INHERITED_ENOUGH * side {
-                    return None;
-                }
-                let tris: Vec<[Vec3; 3]> =
-                    pairs[w[0]..w[1]].iter().map(|&(_, t)| triangles[t as usize].map(to_octree)).collect();
-                let c = voxel_coords(tree, level, voxel as usize);
-                let lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
-                fit(&tris, lo, side, &params).map(|f| (voxel, f.contour.0, slab_thickness(f.contour, side)))
+    let fitter = ContourFitter { tree, triangles: &triangles, bounds: &bounds, params };
+
+    let split = levels.min(SPLIT_LEVEL);
+    let mut contours: Vec<Vec<u32>> = vec![Vec::new(); levels + 1];
+    let all = (0..triangles.len() as u32).collect();
+    let mut frontier = vec![Voxel { index: 0, coords: [0; 3], triangles: all, inherited: f32::INFINITY }];
+    for (level, out) in contours.iter_mut().enumerate().take(split) {
+        // Per voxel of the level: its contour word and its children with their candidates.
+        let expanded: Vec<(u32, Vec<Voxel<Vec<u32>>>)> = frontier
+            .par_iter()
+            .map(|v| {
+                let (word, inherited) = fitter.fit_voxel(level, v, &mut Vec::new());
+                let mut children = Vec::new();
+                fitter.for_each_child(level, v, inherited, &mut Vec::new(), |child, list| {
+                    children.push(child.with(list.to_vec()))
+                });
+                (word, children)
             })
             .collect();
-        let mut out = vec![0u32; n];
-        let mut inh = parent_inherited;
-        for (voxel, c, thickness) in fitted {
-            out[voxel as usize] = c;
-            inh[voxel as usize] = inh[voxel as usize].min(thickness);
+        if level > 0 {
+            *out = vec![0; tree.levels[level].len()];
+            for (v, (word, _)) in frontier.iter().zip(&expanded) {
+                out[v.index] = *word;
+            }
         }
-        contours.push(out);
-        inherited = inh;
+        frontier = expanded.into_iter().flat_map(|(_, children)| children).collect();
+    }
+    let subtrees: Vec<Fill> = frontier
+        .into_par_iter()
+        .map(|voxel| {
+            let mut fill = Fill::subtree(tree, split, voxel.index);
+            fitter.visit(split, &voxel, &mut fill);
+            fill
+        })
+        .collect();
+    for (level, out) in contours.iter_mut().enumerate().skip(split) {
+        *out = subtrees.iter().flat_map(|f| f.words[level].iter().copied()).collect();
+        assert_eq!(out.len(), tree.levels[level].len(), "subtree ranges tile level {level}");
     }
     contours
+}
+
+/// Levels fitted level by level before the tree is split into one task per voxel (≤ 8³ tasks).
+const SPLIT_LEVEL: usize = 3;
+
+/// What contour fitting reads: the octree and the triangles in octree space with their boxes.
+struct ContourFitter<'a> {
+    tree: &'a Octree,
+    triangles: &'a [[Vec3; 3]],
+    bounds: &'a [[Vec3; 2]],
+    params: FitParams,
+}
+
+/// A voxel to fit: its index and integer coordinates at its level, its candidate triangles, and
+/// the thickness (octree units) of its ancestors' nearest contour.
+struct Voxel<T> {
+    index: usize,
+    coords: [u32; 3],
+    triangles: T,
+    inherited: f32,
+}
+
+impl Voxel<()> {
+    fn with<T>(self, triangles: T) -> Voxel<T> {
+        Voxel { index: self.index, coords: self.coords, triangles, inherited: self.inherited }
+    }
+}
+
+/// Contour words of one subtree: per level, a range of voxels, with scratch buffers per level.
+struct Fill {
+    /// Per level: the index of the first voxel `words` holds.
+    first: Vec<usize>,
+    words: Vec<Vec<u32>>,
+    /// Per level: a child's candidate triangles, reused.
+    lists: Vec<Vec<u32>>,
+    corners: Vec<[Vec3; 3]>,
+}
+
+impl Fill {
+    /// The descendants of voxel `index` at level `split`, from that level down.
+    fn subtree(tree: &Octree, split: usize, index: usize) -> Self {
+        let levels = tree.levels.len();
+        let mut first = vec![0; levels];
+        let mut words = vec![Vec::new(); levels];
+        let mut range = index..index + 1;
+        for level in split..levels {
+            first[level] = range.start;
+            words[level] = vec![0; range.len()];
+            if level + 1 < levels {
+                let node = &tree.levels[level];
+                let last = range.end - 1;
+                range = node.first_child[range.start] as usize
+                    ..node.first_child[last] as usize + node.masks[last].count_ones() as usize;
+            }
+        }
+        Fill { first, words, lists: vec![Vec::new(); levels], corners: Vec::new() }
+    }
+}
+
+impl ContourFitter<'_> {
+    /// The contour word of voxel `v` at `level` (0: none) and the inherited thickness its
+    /// children see. No contour where its ancestors' slab already pins the surface to a
+    /// fraction of the voxel ("store one only where it tightens the bound meaningfully").
+    fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, corners: &mut Vec<[Vec3; 3]>) -> (u32, f32) {
+        let side = (-(level as f32)).exp2();
+        if level == 0 || v.inherited <= INHERITED_ENOUGH * side {
+            return (0, v.inherited);
+        }
+        let c = v.coords;
+        let lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
+        corners.clear();
+        corners.extend(v.triangles.as_ref().iter().map(|&t| self.triangles[t as usize]));
+        match fit(corners, lo, side, &self.params) {
+            Some(f) => (f.contour.0, v.inherited.min(slab_thickness(f.contour, side))),
+            None => (0, v.inherited),
+        }
+    }
+
+    /// Calls `f` for each child of interior voxel `v` at `level` with its candidate triangles
+    /// (those of `v` whose boxes meet the child's cube), built in `list`.
+    fn for_each_child<T: AsRef<[u32]>>(
+        &self,
+        level: usize,
+        v: &Voxel<T>,
+        inherited: f32,
+        list: &mut Vec<u32>,
+        mut f: impl FnMut(Voxel<()>, &[u32]),
+    ) {
+        let node = &self.tree.levels[level];
+        let mask = node.masks[v.index] as u32;
+        let mut child = node.first_child[v.index] as usize;
+        let side = (-((level + 1) as f32)).exp2();
+        let c = v.coords;
+        for slot in 0..8u32 {
+            if mask >> slot & 1 == 0 {
+                continue;
+            }
+            let coords = [c[0] * 2 + (slot & 1), c[1] * 2 + (slot >> 1 & 1), c[2] * 2 + (slot >> 2 & 1)];
+            let cmin = Vec3::ONE + Vec3::new(coords[0] as f32, coords[1] as f32, coords[2] as f32) * side;
+            let cmax = cmin + Vec3::splat(side);
+            list.clear();
+            list.extend(v.triangles.as_ref().iter().copied().filter(|&t| {
+                let [lo, hi] = self.bounds[t as usize];
+                cmin.cmple(hi).all() && cmax.cmpge(lo).all()
+            }));
+            f(Voxel { index: child, coords, triangles: (), inherited }, list);
+            child += 1;
+        }
+    }
+
+    /// Fits `v` at `level` and, depth-first, its whole subtree into `fill`.
+    fn visit<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, fill: &mut Fill) {
+        let (word, inherited) = self.fit_voxel(level, v, &mut fill.corners);
+        fill.words[level][v.index - fill.first[level]] = word;
+        if level + 1 == self.tree.levels.len() {
+            return;
+        }
+        let mut list = std::mem::take(&mut fill.lists[level]);
+        self.for_each_child(level, v, inherited, &mut list, |child, triangles| {
+            self.visit(level + 1, &child.with(triangles), fill)
+        });
+        fill.lists[level] = list;
+    }
 }
 
 /// A voxel gets no contour if its ancestors' nearest contour is already at most this fraction of
@@ -113,65 +224,6 @@ fn slab_thickness(c: super::contour::Contour, side: f32) -> f32 {
     let n = c.normal();
     let len = Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).length();
     c.thickness() as f32 * 2.0 * super::contour::CHALF / len * side
-}
-
-/// Per voxel of `level + 1`, the value of its parent in `values` (per voxel of `level`).
-fn expand_to_children(tree: &Octree, level: usize, values: &[f32]) -> Vec<f32> {
-    let node = &tree.levels[level];
-    let mut out = vec![0.0; tree.levels[level + 1].len()];
-    for (i, (&mask, &first)) in node.masks.iter().zip(&node.first_child).enumerate() {
-        let first = first as usize;
-        out[first..first + mask.count_ones() as usize].fill(values[i]);
-    }
-    out
-}
-
-/// Integer coordinates of voxel `i` at `level`.
-fn voxel_coords(tree: &Octree, level: usize, i: usize) -> [u32; 3] {
-    if level < tree.levels.len() - 1 {
-        return voxel::morton::decode(tree.levels[level].codes[i]);
-    }
-    // Leaves carry no codes: find the parent by binary search over first_child.
-    let parents = &tree.levels[level - 1];
-    let p = parents.first_child.partition_point(|&f| f as usize <= i) - 1;
-    let mask = parents.masks[p] as u32;
-    let mut k = parents.first_child[p] as usize;
-    for slot in 0..8 {
-        if mask >> slot & 1 == 1 {
-            if k == i {
-                return voxel::morton::decode(tree.child_code(level - 1, p, slot));
-            }
-            k += 1;
-        }
-    }
-    unreachable!("leaf {i} is a child of its parent");
-}
-
-/// Descends from the root, recording every set voxel whose cube meets `[lo, hi]` (octree space).
-fn collect_pairs(tree: &Octree, lo: Vec3, hi: Vec3, tri: u32, out: &mut [Vec<(u32, u32)>]) {
-    let levels = tree.levels.len() - 1;
-    // (level, index, coords) of voxels to expand.
-    let mut stack: Vec<(usize, usize, [u32; 3])> = vec![(0, 0, [0; 3])];
-    while let Some((level, i, c)) = stack.pop() {
-        let mask = tree.levels[level].masks[i] as u32;
-        let mut child = tree.levels[level].first_child[i] as usize;
-        let side = (-((level + 1) as f32)).exp2();
-        for slot in 0..8u32 {
-            if mask >> slot & 1 == 0 {
-                continue;
-            }
-            let cc = [c[0] * 2 + (slot & 1), c[1] * 2 + (slot >> 1 & 1), c[2] * 2 + (slot >> 2 & 1)];
-            let cmin = Vec3::ONE + Vec3::new(cc[0] as f32, cc[1] as f32, cc[2] as f32) * side;
-            let cmax = cmin + Vec3::splat(side);
-            if cmin.cmple(hi).all() && cmax.cmpge(lo).all() {
-                out[level + 1].push((child as u32, tri));
-                if level + 1 < levels {
-                    stack.push((level + 1, child, cc));
-                }
-            }
-            child += 1;
-        }
-    }
 }
 
 /// What a slot of the descriptor array holds (for the memory breakdown).
