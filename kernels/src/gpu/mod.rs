@@ -14,7 +14,9 @@
 //! `grid.wgsl` ([`grid`], shared by UG, RG, RG-2 and ORG), both over the shared watertight triangle
 //! test `triangle.wgsl` and slab test `slab.wgsl`.
 
+pub(crate) mod bvh;
 pub mod dispatch;
+pub(crate) mod grid;
 pub mod program;
 pub mod rays;
 pub mod render;
