@@ -4,12 +4,13 @@
 //! |---|---|---|
 //! | `bvh` | [`cpu::bvh`] | `gpu/bvh.wgsl` |
 //! | `ug`, `rg`, `rg2`, `org` | [`cpu::grid`] | `gpu/grid.wgsl` |
-//! | `svo-naive` | [`cpu::svo_naive`] | (not yet: CPU only) |
-//! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | (not yet: CPU only) |
-//! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | (not yet: CPU only) |
+//! | `svo-naive` | [`cpu::svo_naive`] | `gpu/svo_naive.wgsl` |
+//! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |
+//! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | `gpu/esvo.wgsl` (over `gpu/octree_cast.wgsl`; beam pre-pass `esvo_beam`) |
 //!
 //! Both triangle kernels share `gpu/triangle.wgsl` (the watertight test of [`cpu::triangle`]) and
-//! `gpu/slab.wgsl` ([`cpu::slab`]). The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
+//! `gpu/slab.wgsl` ([`cpu::slab`]); the three voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
+//! `[1,2]³` frame of [`cpu::octree_ray`]), and their bindings are in `gpu/voxel.rs`. The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
 //! [`cpu::brute_force`].
 //!
 //! [`Traverse`] is the kernel side of a structure's contract (the build/memory side is

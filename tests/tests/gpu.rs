@@ -57,7 +57,6 @@ fn check_scene(name: &str) {
     let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
     let shade = ShadeContext::for_scene(&scene, 0);
-    let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
     let mut failures = Vec::new();
     for entry in kernels::STRUCTURES {
         // Voxel structures at the small resolution the other voxel tests use.
@@ -68,31 +67,88 @@ fn check_scene(name: &str) {
             eprintln!("gpu {name:<12} {:<10} skipped: no GPU program", entry.name);
             continue;
         }
-        let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
-        let t = Instant::now();
-        let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
-            .unwrap_or_else(|e| panic!("{name}/{}: {e}", entry.name))
-            .expect("a GPU program");
-        let d = diff(&gpu.frame, &cpu);
-        eprintln!(
-            "gpu {name:<12} {:<10} {} px, {} both hit, {} hit/miss, {} other triangle, max rel t {:.1e}; \
-             upload {:.1} ms, kernel {:.1} ms, {:.1} s in all on {}",
-            entry.name,
-            d.pixels,
-            d.hits,
-            d.hit_mismatches,
-            d.prim_mismatches,
-            d.max_rel_t,
-            gpu.run.upload_ms,
-            gpu.run.kernel_ms.first().copied().unwrap_or(0.0),
-            t.elapsed().as_secs_f64(),
-            ctx.adapter_info().name
-        );
-        if d.hit_mismatches as f64 > MAX_HIT_MISMATCH * d.pixels as f64 || d.max_rel_t > MAX_REL_T {
-            failures.push(format!("{}: {d:?}", entry.name));
+        if let Some(failure) = compare(ctx, name, entry.name, accel.as_ref(), &camera, &shade) {
+            failures.push(failure);
         }
     }
     assert!(failures.is_empty(), "{name}: GPU differs from CPU beyond the tolerance:\n{}", failures.join("\n"));
 }
 
 tests::per_builtin_scene!(check_scene);
+
+/// Renders `accel` on the GPU and the CPU, prints the comparison, and describes it if it fails.
+fn compare(
+    ctx: &kernels::gpu::GpuContext,
+    scene: &str,
+    label: &str,
+    accel: &dyn kernels::Accel,
+    camera: &Camera,
+    shade: &ShadeContext,
+) -> Option<String> {
+    let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+    let cpu = render(accel, camera, shade, Workload::Primary);
+    let t = Instant::now();
+    let gpu = render_primary(ctx, accel, camera, &opts)
+        .unwrap_or_else(|e| panic!("{scene}/{label}: {e}"))
+        .expect("a GPU program");
+    let d = diff(&gpu.frame, &cpu);
+    eprintln!(
+        "gpu {scene:<12} {label:<10} {} px, {} both hit, {} hit/miss, {} other triangle, max rel t {:.1e}; \
+         upload {:.1} ms, kernel {:.1} ms, {:.1} s in all on {}",
+        d.pixels,
+        d.hits,
+        d.hit_mismatches,
+        d.prim_mismatches,
+        d.max_rel_t,
+        gpu.run.upload_ms,
+        gpu.run.kernel_ms.first().copied().unwrap_or(0.0),
+        t.elapsed().as_secs_f64(),
+        ctx.adapter_info().name
+    );
+    let failed = d.hit_mismatches as f64 > MAX_HIT_MISMATCH * d.pixels as f64 || d.max_rel_t > MAX_REL_T;
+    failed.then(|| format!("{label}: {d:?}"))
+}
+
+/// ESVO's switches beyond the defaults the per-scene test builds with: the beam pre-pass (a second
+/// dispatch on the GPU, `beam_starts` on the CPU), contours off, raw attributes.
+#[test]
+fn esvo_variants() {
+    let Some(ctx) = context_for_tests("gpu::esvo_variants") else {
+        return;
+    };
+    let entry = kernels::find_structure("esvo").expect("esvo is registered");
+    let variants: [(&str, &[&str]); 3] = [
+        ("esvo+beam", &["esvo.beam=on"]),
+        ("esvo-ctr", &["esvo.contours=off", "esvo.beam=on"]),
+        ("esvo-raw", &["esvo.attributes=raw"]),
+    ];
+    let mut failures = Vec::new();
+    for name in ["bunny", "dragon-11k", "menger", "stadium"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        let build = |extra: &[&str]| {
+            let params = Params::parse(["voxel.levels=8"].iter().chain(extra).copied()).expect("params");
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
+        };
+        for (label, extra) in variants {
+            failures.extend(compare(ctx, name, label, build(extra).as_ref(), &camera, &shade));
+        }
+        // The pre-pass must have run: beam starts shorten the main pass's traversal. (Agreement
+        // alone cannot tell: a beam buffer left at zero lets every ray start at 0.)
+        let steps = |extra: &[&str]| {
+            let opts = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            render_primary(ctx, build(extra).as_ref(), &camera, &opts)
+                .unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
+                .and_then(|r| r.steps_per_ray())
+                .expect("counted steps")
+        };
+        let (with, without) = (steps(&["esvo.beam=on"]), steps(&[]));
+        eprintln!("gpu {name:<12} esvo main-pass steps per ray: {with:.2} with the beam, {without:.2} without");
+        if with >= without {
+            failures.push(format!("{name}: the beam pre-pass saves no steps ({with:.2} vs {without:.2})"));
+        }
+    }
+    assert!(failures.is_empty(), "ESVO variants differ from the CPU beyond the tolerance:\n{}", failures.join("\n"));
+}

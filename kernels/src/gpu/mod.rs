@@ -12,7 +12,10 @@
 //!
 //! WGSL kernels sit here beside their Rust binding, one per structure: `bvh.wgsl` ([`bvh`]) and
 //! `grid.wgsl` ([`grid`], shared by UG, RG, RG-2 and ORG), both over the shared watertight triangle
-//! test `triangle.wgsl` and slab test `slab.wgsl`.
+//! test `triangle.wgsl` and slab test `slab.wgsl`; `svo_naive.wgsl`, `svo.wgsl` and `esvo.wgsl`
+//! ([`voxel`]), over the mirrored-frame set-up `octree_ray.wgsl` and, for the last two, the shared
+//! Laine–Karras caster `octree_cast.wgsl` (the WGSL twin of `cpu::octree_cast`). Voxel kernels
+//! return the hit's `t` and Morton code; like the triangle kernels they read no shading attributes.
 
 pub(crate) mod bvh;
 pub mod dispatch;
@@ -22,6 +25,7 @@ pub mod rays;
 pub mod render;
 #[cfg(test)]
 mod tests;
+pub(crate) mod voxel;
 
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
