@@ -63,20 +63,20 @@ fn check_scene(name: &str) {
         // Voxel structures at the small resolution the other voxel tests use.
         let params = Params::parse(["voxel.levels=7"]).expect("params");
         let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let t = Instant::now();
         let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name}/{}: {e}", entry.name));
         if accel.gpu_program(&camera).is_none() {
-            eprintln!("gpu {name:<12} {:<10} skipped: no GPU program", entry.name);
+            eprintln!("gpu {name:<12} {:<10} skipped: no GPU program (built in {:.2} s)", entry.name, secs(t));
             continue;
         }
         let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
-        let t = Instant::now();
         let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
             .unwrap_or_else(|e| panic!("{name}/{}: {e}", entry.name))
             .expect("a GPU program");
         let d = diff(&gpu.frame, &cpu);
         eprintln!(
             "gpu {name:<12} {:<10} {} px, {} both hit, {} hit/miss, {} other triangle, max rel t {:.1e}; \
-             upload {:.1} ms, kernel {:.1} ms, {:.1} s in all on {}",
+             upload {:.1} ms, kernel {:.1} ms; {:.2} s with build and CPU render; on {}",
             entry.name,
             d.pixels,
             d.hits,
@@ -85,7 +85,7 @@ fn check_scene(name: &str) {
             d.max_rel_t,
             gpu.run.upload_ms,
             gpu.run.kernel_ms.first().copied().unwrap_or(0.0),
-            t.elapsed().as_secs_f64(),
+            secs(t),
             ctx.adapter_info().name
         );
         if d.hit_mismatches as f64 > MAX_HIT_MISMATCH * d.pixels as f64 || d.max_rel_t > MAX_REL_T {
@@ -93,6 +93,10 @@ fn check_scene(name: &str) {
         }
     }
     assert!(failures.is_empty(), "{name}: GPU differs from CPU beyond the tolerance:\n{}", failures.join("\n"));
+}
+
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
 }
 
 tests::per_builtin_scene!(check_scene);
