@@ -62,21 +62,27 @@ fn check_scene(name: &str) {
         // Voxel structures at the small resolution the other voxel tests use.
         let params = Params::parse(["voxel.levels=7"]).expect("params");
         let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let t = Instant::now();
         let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name}/{}: {e}", entry.name));
         if accel.gpu_program(&camera).is_none() {
-            eprintln!("gpu {name:<12} {:<10} skipped: no GPU program", entry.name);
+            eprintln!("gpu {name:<12} {:<10} skipped: no GPU program (built in {:.2} s)", entry.name, secs(t));
             continue;
         }
-        if let Some(failure) = compare(ctx, name, entry.name, accel.as_ref(), &camera, &shade) {
+        if let Some(failure) = compare(ctx, name, entry.name, accel.as_ref(), &camera, &shade, t) {
             failures.push(failure);
         }
     }
     assert!(failures.is_empty(), "{name}: GPU differs from CPU beyond the tolerance:\n{}", failures.join("\n"));
 }
 
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
 tests::per_builtin_scene!(check_scene);
 
-/// Renders `accel` on the GPU and the CPU, prints the comparison, and describes it if it fails.
+/// Renders `accel` on the GPU and the CPU, prints the comparison (with the time since `started`,
+/// before the build), and describes it if it fails.
 fn compare(
     ctx: &kernels::gpu::GpuContext,
     scene: &str,
@@ -84,17 +90,17 @@ fn compare(
     accel: &dyn kernels::Accel,
     camera: &Camera,
     shade: &ShadeContext,
+    started: Instant,
 ) -> Option<String> {
     let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
     let cpu = render(accel, camera, shade, Workload::Primary);
-    let t = Instant::now();
     let gpu = render_primary(ctx, accel, camera, &opts)
         .unwrap_or_else(|e| panic!("{scene}/{label}: {e}"))
         .expect("a GPU program");
     let d = diff(&gpu.frame, &cpu);
     eprintln!(
         "gpu {scene:<12} {label:<10} {} px, {} both hit, {} hit/miss, {} other triangle, max rel t {:.1e}; \
-         upload {:.1} ms, kernel {:.1} ms, {:.1} s in all on {}",
+         upload {:.1} ms, kernel {:.1} ms; {:.2} s with build and CPU render; on {}",
         d.pixels,
         d.hits,
         d.hit_mismatches,
@@ -102,7 +108,7 @@ fn compare(
         d.max_rel_t,
         gpu.run.upload_ms,
         gpu.run.kernel_ms.first().copied().unwrap_or(0.0),
-        t.elapsed().as_secs_f64(),
+        secs(started),
         ctx.adapter_info().name
     );
     let failed = d.hit_mismatches as f64 > MAX_HIT_MISMATCH * d.pixels as f64 || d.max_rel_t > MAX_REL_T;
@@ -133,7 +139,8 @@ fn esvo_variants() {
             (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
         };
         for (label, extra) in variants {
-            failures.extend(compare(ctx, name, label, build(extra).as_ref(), &camera, &shade));
+            let t = Instant::now();
+            failures.extend(compare(ctx, name, label, build(extra).as_ref(), &camera, &shade, t));
         }
         // The pre-pass must have run: beam starts shorten the main pass's traversal. (Agreement
         // alone cannot tell: a beam buffer left at zero lets every ray start at 0.)

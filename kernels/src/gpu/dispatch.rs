@@ -435,10 +435,12 @@ impl<'a> Runner<'a> {
             let _ = tx.send(r);
         });
         self.wait("the readback")?;
-        match rx.try_recv() {
+        // Another thread's poll (tests share one device) may be the one running the callback, so
+        // it can arrive just after this thread's wait returns: wait for it too, boundedly.
+        match rx.recv_timeout(WAIT_TIMEOUT) {
             Ok(Ok(())) => {}
             Ok(Err(e)) => return Err(self.fail("mapping the readback", e)),
-            Err(_) => return Err(self.fail("mapping the readback", "the map callback did not run")),
+            Err(_) => return Err(GpuError::Timeout { label: self.program.label.into(), what: "mapping the readback" }),
         }
         let bytes = buffer.get_mapped_range(..).map_err(|e| self.fail("reading the mapped range", e))?.to_vec();
         buffer.unmap();
