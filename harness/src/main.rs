@@ -4,6 +4,7 @@ mod agreement;
 mod alloc;
 mod cli;
 mod compare;
+mod gpu;
 mod images;
 mod machine;
 mod merge;
@@ -69,7 +70,13 @@ fn list(what: ListWhat) {
         }
     }
     if all || what == ListWhat::Backends {
-        println!("backends:\n  cpu        rayon over 8×8 tiles\n  gpu        wgpu + WGSL (not built yet)");
+        println!("backends:\n  cpu        rayon over 8×8 tiles");
+        match kernels::gpu::probe() {
+            Ok(info) => {
+                println!("  gpu        wgpu + WGSL compute kernels, primary rays; adapter: {}", info.describe())
+            }
+            Err(e) => println!("  gpu        wgpu + WGSL compute kernels, primary rays; unavailable here: {e}"),
+        }
     }
     if all || what == ListWhat::Presets {
         println!("presets:");

@@ -1,6 +1,7 @@
 //! The benchmark matrix: for every scene, every structure, every backend and workload — build
 //! (warm-up + timed reps), measure memory, render (warm-up + timed reps), count traversal work in
-//! a separate pass, check agreement with the reference, write images, and record the case.
+//! a separate pass, check agreement with the reference, write images, and record the case. GPU
+//! rows (see [`crate::gpu`]) are checked against the same structure's CPU frame instead.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -8,14 +9,16 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use kernels::cpu::render::{self, Frame, ShadeContext, Workload};
+use kernels::gpu::GpuContext;
 use kernels::{Accel, StructureEntry};
-use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, Timing};
+use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedRender, Timing};
 use scenes::{Camera, Scene, Triangle};
 use structures::{BuildInput, Params};
 
 use crate::agreement;
 use crate::alloc;
 use crate::cli::{Backend, Plan, RunArgs};
+use crate::gpu;
 use crate::images;
 use crate::machine;
 use crate::output::RunOutput;
@@ -27,6 +30,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     check_optimised(args.allow_unoptimized)?;
     let plan = args.plan();
     validate(&plan)?;
+    let gpu = if plan.backends.contains(&Backend::Gpu) { Some(gpu::context()?) } else { None };
     let params = Params::parse(plan.params.iter().map(String::as_str))?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
 
@@ -59,7 +63,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
             let t = Instant::now();
             let scene = scenes::load_scene(scene_name).with_context(|| format!("scene '{scene_name}'"))?;
             let load_ms = ms_since(t);
-            let mut ctx = SceneRun::new(&scene, load_ms);
+            let mut ctx = SceneRun::new(&scene, load_ms, gpu);
             for structure in &plan.structures {
                 for params in variants(&plan, &params, structure) {
                     let case = measure_case(&mut ctx, structure, &params, &plan, args, &out, &bar)
@@ -112,9 +116,6 @@ fn validate(plan: &Plan) -> Result<()> {
             bail!("unknown structure '{s}' (known: {})", known.join(", "));
         }
     }
-    if plan.backends.contains(&Backend::Gpu) {
-        bail!("the GPU backend (wgpu + WGSL kernels) is not built yet; run with --backend cpu");
-    }
     if plan.width == 0 || plan.height == 0 || plan.reps == 0 || plan.threads == 0 {
         bail!("--width, --height, --reps and --threads must be at least 1");
     }
@@ -166,11 +167,14 @@ struct SceneRun<'a> {
     reference: Option<Box<dyn Accel>>,
     /// The reference structure's primary frame, once rendered.
     reference_frame: Option<Frame>,
+    /// The GPU backend's adapter, when the run uses it.
+    gpu: Option<&'static GpuContext>,
 }
 
 impl<'a> SceneRun<'a> {
-    fn new(scene: &'a Scene, load_ms: f64) -> Self {
+    fn new(scene: &'a Scene, load_ms: f64, gpu: Option<&'static GpuContext>) -> Self {
         Self {
+            gpu,
             scene,
             triangles: scene.triangles(),
             load_ms,
@@ -226,9 +230,12 @@ fn measure_case(
         render: Vec::new(),
         images: Vec::new(),
         machine: None,
+        skipped: Vec::new(),
     };
     let camera = Camera::new(scene.camera_spec(), plan.width, plan.height);
     let shade = ShadeContext::for_scene(scene, args.seed);
+    // This structure's CPU primary frame: the reference of its GPU rows.
+    let mut cpu_primary: Option<Frame> = None;
     for &backend in &plan.backends {
         for &workload in &plan.workloads {
             bar.set_message(format!(
@@ -237,6 +244,24 @@ fn measure_case(
                 workload.name(),
                 backend_name(backend)
             ));
+            if backend == Backend::Gpu {
+                let gpu = ctx.gpu.context("the GPU context is created before the matrix runs")?;
+                let cpu_frame = match cpu_primary.take() {
+                    Some(frame) => frame,
+                    None => render::render(accel.as_ref(), &camera, &shade, Workload::Primary),
+                };
+                match gpu::measure(gpu, accel.as_ref(), &camera, workload, plan, &cpu_frame)? {
+                    gpu::Outcome::Row(stats) => case.render.push(*stats),
+                    gpu::Outcome::Skipped(reason) => {
+                        bar.suspend(|| {
+                            eprintln!("  {}/{structure}: gpu {}: skipped, {reason}", scene.name, workload.name())
+                        });
+                        case.skipped.push(SkippedRender { backend: "gpu".into(), workload: workload.name(), reason });
+                    }
+                }
+                cpu_primary = Some(cpu_frame);
+                continue;
+            }
             let device = &out.results.machine.cpu;
             let reference = paired.and(ctx.reference.as_deref());
             let (mut stats, frame, heat) =
@@ -254,8 +279,11 @@ fn measure_case(
                 let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
                 case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, &heat)?);
             }
-            if structure == REFERENCE && workload == Workload::Primary && ctx.reference_frame.is_none() {
-                ctx.reference_frame = Some(frame);
+            if workload == Workload::Primary {
+                if structure == REFERENCE && ctx.reference_frame.is_none() {
+                    ctx.reference_frame = Some(frame.clone());
+                }
+                cpu_primary = Some(frame);
             }
             case.render.push(stats);
         }
@@ -365,6 +393,7 @@ fn timed_renders(
         hit_fraction: frame.hit_fraction(),
         agreement: None,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
+        gpu: None,
     };
     (stats, frame, heat)
 }

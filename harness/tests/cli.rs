@@ -119,13 +119,76 @@ fn a_bad_scene_stops_the_run_and_keeps_finished_cases() {
 }
 
 #[test]
-fn unknown_names_and_the_missing_gpu_backend_are_refused() {
+fn unknown_names_are_refused() {
     let o = harness(&["run", "--structures", "kd-tree"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown structure 'kd-tree'"));
-    let o = harness(&["run", "--scenes", "bunny", "--backend", "gpu"]);
+}
+
+/// Whether this machine must have a GPU adapter (as `kernels::gpu::context_for_tests` decides).
+fn gpu_required() -> bool {
+    std::env::var("ACCEL_BENCH_REQUIRE_GPU").is_ok_and(|v| v.trim() == "1") || std::env::var_os("CI").is_some()
+}
+
+#[test]
+fn asking_for_the_gpu_without_a_usable_adapter_fails_the_run() {
+    let _turn = turn();
+    let o = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--scenes", "teapot", "--structures", "bvh", "--gpu", "--out"])
+        .arg(temp_dir("no-adapter"))
+        .env("ACCEL_BENCH_ADAPTER", "no-such-adapter-anywhere")
+        .output()
+        .expect("the harness runs");
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("GPU backend"));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("GPU backend was asked for") && stderr.contains("matches no adapter"), "{stderr}");
+}
+
+#[test]
+fn gpu_rows_name_the_adapter_and_agree_with_the_cpu() {
+    let out = temp_dir("gpu");
+    let out_arg = out.to_string_lossy().into_owned();
+    let mut args =
+        vec!["run", "--scenes", "teapot", "--structures", "bvh,org,svo", "--backend", "cpu,gpu", "--out", &out_arg];
+    args.extend_from_slice(&["--workload", "primary,shadow", "--no-images"]);
+    args.extend_from_slice(TINY);
+    let o = harness(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() {
+        // Asking for the GPU without an adapter is a hard error, never a silent CPU-only run.
+        assert!(stderr.contains("GPU backend was asked for") && stderr.contains("adapter"), "stderr: {stderr}");
+        assert!(!gpu_required(), "a GPU adapter is required here but the run failed: {stderr}");
+        eprintln!("gpu_rows_name_the_adapter_and_agree_with_the_cpu: skipped, no GPU adapter");
+        return;
+    }
+    let results = read_json(&out.join("results.json"));
+    let cases = results["cases"].as_array().expect("cases");
+    for case in &cases[..2] {
+        let renders = case["render"].as_array().expect("renders");
+        let gpu: Vec<_> = renders.iter().filter(|r| r["backend"] == "gpu").collect();
+        assert_eq!(gpu.len(), 1, "{}: one GPU row, primary only", case["structure"]);
+        let g = gpu[0];
+        assert_eq!(g["workload"], "primary");
+        assert!(g["gpu"]["adapter"].as_str().is_some_and(|a| !a.is_empty() && g["device"] == a));
+        assert!(g["gpu"]["driver"].is_string() && g["gpu"]["upload_ms"].as_f64().is_some());
+        assert!(g["timing"].is_null(), "timing is flattened into the row");
+        assert_eq!(g["reps"], 2);
+        assert!(g["mrays_per_s"].as_f64().is_some_and(|m| m > 0.0));
+        assert!(g["steps_per_ray_mean"].as_f64().is_some_and(|s| s > 0.0));
+        assert_eq!(g["agreement"]["reference"], "cpu");
+        assert_eq!(g["agreement"]["hit_mismatches"], 0);
+        assert_eq!(g["agreement"]["pixels"], 48 * 32);
+        assert_eq!(case["skipped"][0]["workload"], "shadow", "{}", case["structure"]);
+    }
+    assert_eq!(cases[2]["structure"], "svo");
+    let reasons: Vec<&str> =
+        cases[2]["skipped"].as_array().expect("skips").iter().filter_map(|s| s["reason"].as_str()).collect();
+    assert!(reasons.iter().any(|r| r.contains("no GPU kernel")), "{reasons:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(report.contains("- GPU: ") && report.contains("| gpu | primary |"), "{report}");
+    let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
+    assert!(html.contains("<b>GPU</b>") && html.contains("gpu/primary"));
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]

@@ -2,19 +2,23 @@
 //!
 //! | structure | CPU kernel | WGSL kernel |
 //! |---|---|---|
-//! | `bvh` | [`cpu::bvh`] | (issue 5) |
-//! | `ug`, `rg`, `rg2`, `org` | [`cpu::grid`] | (issue 5) |
-//! | `svo-naive` | [`cpu::svo_naive`] | (issue 5) |
-//! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | (issue 5) |
-//! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | (issue 5) |
+//! | `bvh` | [`cpu::bvh`] | `gpu/bvh.wgsl` |
+//! | `ug`, `rg`, `rg2`, `org` | [`cpu::grid`] | `gpu/grid.wgsl` |
+//! | `svo-naive` | [`cpu::svo_naive`] | `gpu/svo_naive.wgsl` |
+//! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |
+//! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | `gpu/esvo.wgsl` (over `gpu/octree_cast.wgsl`; beam pre-pass `esvo_beam`) |
 //!
-//! The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle [`cpu::brute_force`].
+//! Both triangle kernels share `gpu/triangle.wgsl` (the watertight test of [`cpu::triangle`]) and
+//! `gpu/slab.wgsl` ([`cpu::slab`]); the three voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
+//! `[1,2]³` frame of [`cpu::octree_ray`]), and their bindings are in `gpu/voxel.rs`. The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
+//! [`cpu::brute_force`].
 //!
-//! [`Traverse`] is the CPU side of a structure's contract (the build/memory side is
+//! [`Traverse`] is the kernel side of a structure's contract (the build/memory side is
 //! `structures::Structure`); [`registry`] pairs each builder with its kernels by name;
-//! [`cpu::render`] renders any of them over rayon 8×8 tiles.
+//! [`cpu::render`] renders any of them over rayon 8×8 tiles, [`gpu::render`] through wgpu.
 
 pub mod cpu;
+pub mod gpu;
 pub mod registry;
 pub mod stats;
 
@@ -49,6 +53,11 @@ pub trait Traverse: Send + Sync {
     /// pixel's ray may start from (ESVO's beam optimisation, seed 000 §6.2). Its work is added to
     /// `counters` when given. `None`: rays start at 0.
     fn primary_starts(&self, _camera: &Camera, _counters: Option<&mut Counters>) -> Option<Vec<f32>> {
+        None
+    }
+    /// The structure's GPU kernel for primary rays of `camera`: its WGSL `trace` and the words it
+    /// reads (see [`gpu::GpuProgram`]). `None`: no GPU kernel; the GPU backend skips the structure.
+    fn gpu_program(&self, _camera: &Camera) -> Option<gpu::GpuProgram<'_>> {
         None
     }
 }

@@ -3,6 +3,7 @@
 //! and paper reproductions; PNG images; and the pure logic of `harness compare` and `harness merge`.
 
 pub mod compare;
+pub mod gpu;
 pub mod html;
 pub mod images;
 pub mod markdown;

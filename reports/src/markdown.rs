@@ -24,11 +24,16 @@ pub fn report(results: &Results) -> String {
             let _ = writeln!(out, "{indent}{l}");
         });
     }
+    for adapter in crate::gpu::adapters(results) {
+        let _ = writeln!(out, "- GPU: {adapter}");
+    }
     let _ = writeln!(
         out,
         "\nTimes are medians over the timed reps (min–max in brackets). N_c counts nodes or cells, N_p \
          pointers or triangle references. Steps, visits and tests are per ray, from a separate counting \
-         pass. Agreement compares primary hits with the reference on the same pixels.\n"
+         pass. Agreement compares primary hits with the reference on the same pixels. GPU rows: render ms \
+         is kernel time alone (upload listed under the table), steps only are counted, and agreement is \
+         with the same structure's CPU kernel.\n"
     );
     for (tag, view) in &views {
         let section = crate::paper::section(view);
@@ -118,7 +123,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
             let t = &r.timing;
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
+                "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {:.1} | {} | {} | {:.1} | {} |",
                 label,
                 r.backend,
                 r.workload,
@@ -133,14 +138,21 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
                 t.ms_max,
                 r.mrays_per_s,
                 r.steps_per_ray_mean,
-                r.node_visits_per_ray_mean,
-                r.prim_tests_per_ray_mean,
+                per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
+                per_ray(r.counts_visits(), r.prim_tests_per_ray_mean),
                 100.0 * r.hit_fraction,
                 agreement(r.agreement.as_ref())
             );
         }
     }
     let _ = writeln!(out);
+    let notes = crate::gpu::notes(cases);
+    for line in &notes {
+        let _ = writeln!(out, "- {line}");
+    }
+    if !notes.is_empty() {
+        let _ = writeln!(out);
+    }
     let images: Vec<&String> = cases.iter().flat_map(|c| &c.images).collect();
     if !images.is_empty() {
         for img in images {
@@ -148,6 +160,11 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
         }
         let _ = writeln!(out, "\n");
     }
+}
+
+/// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).
+fn per_ray(counted: bool, mean: f64) -> String {
+    if counted { format!("{mean:.1}") } else { "—".into() }
 }
 
 fn agreement(a: Option<&Agreement>) -> String {

@@ -92,6 +92,18 @@ pub struct Case {
     /// The machine tag of a merged result file (see [`Results::merged`]); `None` in a single run.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub machine: Option<String>,
+    /// Renders of the matrix this case did not run, and why (a structure without a GPU kernel,
+    /// a workload the GPU backend does not run).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub skipped: Vec<SkippedRender>,
+}
+
+/// A (backend, workload) of the matrix a case skipped.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SkippedRender {
+    pub backend: String,
+    pub workload: String,
+    pub reason: String,
 }
 
 impl Case {
@@ -182,8 +194,9 @@ pub struct MemoryStats {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RenderStats {
     pub backend: String,
-    /// CPU model or GPU adapter name (and driver).
+    /// CPU model or GPU adapter name (the driver is in [`RenderStats::gpu`]).
     pub device: String,
+    /// Worker threads of a CPU render; 0 for the GPU.
     pub threads: usize,
     pub width: u32,
     pub height: u32,
@@ -203,6 +216,54 @@ pub struct RenderStats {
     /// reps (see [`BuildStats::reference_timing`]).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub reference_timing: Option<Timing>,
+    /// GPU rows only: the adapter, the upload and how the kernel was timed. The row's `timing` is
+    /// then kernel time alone (pre-pass included), `steps_per_ray_mean` comes from a separate
+    /// counted dispatch, visits and tests per ray are not counted (0), and `agreement` compares
+    /// with the same structure's CPU kernel (`reference` = `cpu`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gpu: Option<GpuStats>,
+}
+
+impl RenderStats {
+    /// Whether node visits and primitive tests were counted (not on the GPU, which counts steps only).
+    pub fn counts_visits(&self) -> bool {
+        self.gpu.is_none()
+    }
+}
+
+/// What a GPU row records beyond the common fields (DESIGN.md §5, §8).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GpuStats {
+    /// Adapter name, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)` or `NVIDIA GeForce RTX 4090`.
+    pub adapter: String,
+    /// Driver name and version, e.g. `llvmpipe` and `Mesa 22.3.6 (LLVM 15.0.6)`.
+    pub driver: String,
+    pub driver_info: String,
+    /// Graphics API wgpu drove: `vulkan`, `metal`, `dx12`.
+    pub api: String,
+    /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu` (software rasteriser) or `Other`.
+    pub device_type: String,
+    /// `timestamp-query` (device clock around each pass) or `wall-clock` (submit to completion).
+    pub timer: String,
+    /// Wall-clock upload of the structure's buffers and the rays: creation, write, wait.
+    pub upload_ms: f64,
+    /// Bytes uploaded: the structure's buffers, the rays and the frame uniform.
+    pub upload_bytes: u64,
+    /// Bytes of the structure's buffers alone: its layout's words plus any triangle soup the kernel
+    /// reads (the soup is not part of `memory.bytes`).
+    pub structure_bytes: u64,
+    /// Storage bindings the structure's buffers took (more than one per buffer when split).
+    pub bindings: u64,
+    /// The pre-pass alone (ESVO's beam), when the structure has one and timestamps are available.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub prepass: Option<Timing>,
+}
+
+impl GpuStats {
+    /// `adapter — driver driver_info (api, device type)` for reports.
+    pub fn describe(&self) -> String {
+        format!("{} — {} {} ({}, {})", self.adapter, self.driver, self.driver_info, self.api, self.device_type)
+    }
 }
 
 /// How this render's primary hits compare with a reference's on the same pixels.

@@ -64,6 +64,13 @@ impl Camera {
         Ray::new(self.spec.eye, dir.normalize())
     }
 
+    /// The unit viewing direction (through the image centre), and the image-plane vectors spanning
+    /// one pixel to the right and one pixel down at unit distance: what [`Camera::ray_through`]
+    /// combines, for kernels that generate rays themselves (the GPU pre-passes).
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        (self.forward, self.right_per_px, self.down_per_px)
+    }
+
     /// The angle one pixel subtends at unit distance (for LOD: a voxel of size `s` at distance
     /// `t` covers about `s / (t · pixel_angle)` pixels).
     pub fn pixel_angle(&self) -> f32 {

@@ -1,11 +1,12 @@
 //! CPU kernel of the reference BVH: ordered depth-first traversal with a short stack of
-//! `(node, entry t)` pairs, and the robust slab test of [`super::slab`]. WGSL twin: (issue 5).
+//! `(node, entry t)` pairs, and the robust slab test of [`super::slab`]. WGSL twin: `gpu/bvh.wgsl`.
 
-use scenes::Ray;
+use scenes::{Camera, Ray};
 use structures::bvh::{Bvh, BvhNode, MAX_DEPTH};
 
 use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// Boxes entered up to this factor beyond the best hit so far are still opened. A triangle hit
@@ -109,5 +110,9 @@ impl Traverse for Bvh {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::bvh::program(self))
     }
 }

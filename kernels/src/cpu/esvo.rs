@@ -2,7 +2,7 @@
 //! ([`super::octree_cast`]) over child descriptors — relative child pointers, far pointers,
 //! cooperating contours intersected into the active span — plus the attribute lookup of Fig. 8
 //! (page header → info section → attachment) and the beam optimisation of §6.2 for primary rays.
-//! WGSL twin: (issue 5).
+//! WGSL twin: `kernels/src/gpu/esvo.wgsl` (beam pre-pass `esvo_beam`).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -15,6 +15,7 @@ use structures::voxel::morton;
 
 use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
 use super::octree_ray::OctreeRay;
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The descriptor array as the caster sees it.
@@ -183,5 +184,9 @@ impl Traverse for Esvo {
             None => beam_starts(self, camera, &mut NoStats),
             Some(c) => beam_starts(self, camera, c),
         })
+    }
+
+    fn gpu_program(&self, camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::esvo(self, camera))
     }
 }

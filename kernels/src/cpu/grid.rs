@@ -1,7 +1,7 @@
 //! CPU kernel of the grid family (UG, RG, RG-2, ORG share one layout, `structures::grid::layout`):
 //! a hierarchical 3D-DDA — Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing"
 //! (Eurographics 1987) — per level, descending into a sub-grid with the ray clipped to the parent
-//! cell's span (DESIGN.md §4.5 "Traversal", seed 002). WGSL twin: (issue 5).
+//! cell's span (DESIGN.md §4.5 "Traversal", seed 002). WGSL twin: `gpu/grid.wgsl`.
 //!
 //! **Exact cell spans.** Every boundary crossing `t` is computed afresh as
 //! `(boundary − origin) · inv_dir`, with the boundary from [`GridHeader::boundary`] — never by
@@ -26,11 +26,12 @@
 //! grid is left after at most `res.x + res.y + res.z` cells. No mailbox: a triangle listed in
 //! several cells is tested again in each.
 
-use scenes::Ray;
+use scenes::{Camera, Ray};
 use structures::grid::{Grid, GridHeader, SUBGRID_BIT};
 
 use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (DESIGN.md §4.5), the cap the
@@ -239,5 +240,9 @@ impl Traverse for Grid {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::grid::program(self))
     }
 }

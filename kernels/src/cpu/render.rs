@@ -93,8 +93,28 @@ pub struct Frame {
 }
 
 impl Frame {
-    fn tiles_x(width: u32) -> u32 {
+    pub fn tiles_x(width: u32) -> u32 {
         width.div_ceil(TILE)
+    }
+
+    /// Samples a `width` × `height` frame stores: whole tiles, so pixels past the right and bottom
+    /// edges are padding when the size is not a multiple of [`TILE`].
+    pub fn sample_count(width: u32, height: u32) -> usize {
+        (Self::tiles_x(width) * height.div_ceil(TILE)) as usize * TILE_PIXELS
+    }
+
+    /// The pixel of sample `index` in the tile-major order (possibly padding, outside the image):
+    /// the one order the CPU renderer and the GPU ray buffers (`gpu::rays`) share.
+    pub fn pixel_of(width: u32, index: usize) -> (u32, u32) {
+        let (tile, i) = ((index / TILE_PIXELS) as u32, (index % TILE_PIXELS) as u32);
+        let tiles_x = Self::tiles_x(width);
+        ((tile % tiles_x) * TILE + i % TILE, (tile / tiles_x) * TILE + i / TILE)
+    }
+
+    /// A frame from samples already in the tile-major order (a GPU readback), padding included.
+    pub fn from_tile_major(width: u32, height: u32, samples: Vec<Sample>) -> Self {
+        assert_eq!(samples.len(), Self::sample_count(width, height), "one sample per tile pixel");
+        Self { width, height, samples, rays: u64::from(width) * u64::from(height) }
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
@@ -151,8 +171,7 @@ pub fn render_counted(
     ctx: &ShadeContext,
     workload: Workload,
 ) -> (Frame, CounterImage) {
-    let tiles = (Frame::tiles_x(camera.width) * camera.height.div_ceil(TILE)) as usize;
-    let mut counters = vec![Counters::default(); tiles * TILE_PIXELS];
+    let mut counters = vec![Counters::default(); Frame::sample_count(camera.width, camera.height)];
     let frame = render_tiles(accel, camera, ctx, workload, Some(&mut counters));
     (frame, CounterImage { counters })
 }
@@ -165,9 +184,7 @@ fn render_tiles(
     counters: Option<&mut [Counters]>,
 ) -> Frame {
     let (w, h) = (camera.width, camera.height);
-    let tiles_x = Frame::tiles_x(w);
-    let tiles = (tiles_x * h.div_ceil(TILE)) as usize;
-    let mut samples = vec![Sample::MISS; tiles * TILE_PIXELS];
+    let mut samples = vec![Sample::MISS; Frame::sample_count(w, h)];
     let mut counters = counters;
     let starts = match workload {
         // The pre-pass's work is charged to the first pixel's counters (totals stay exact).
@@ -175,12 +192,10 @@ fn render_tiles(
         _ => None,
     };
     let start = |x: u32, y: u32| starts.as_ref().map_or(0.0, |s| s[(y * w + x) as usize]);
-    let tile_origin = |tile: usize| ((tile as u32 % tiles_x) * TILE, (tile as u32 / tiles_x) * TILE);
     match counters {
         None => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
-            let (x0, y0) = tile_origin(tile);
             for (i, s) in out.iter_mut().enumerate() {
-                let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
                 if x < w && y < h {
                     *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), None);
                 }
@@ -189,9 +204,8 @@ fn render_tiles(
         Some(counters) => {
             samples.par_chunks_mut(TILE_PIXELS).zip(counters.par_chunks_mut(TILE_PIXELS)).enumerate().for_each(
                 |(tile, (out, cnt))| {
-                    let (x0, y0) = tile_origin(tile);
                     for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
-                        let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                        let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
                         if x < w && y < h {
                             *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), Some(c));
                         }

@@ -1,14 +1,15 @@
 //! CPU kernel of `svo` (seed 001 §2.1 layout, `structures::svo`): the Laine–Karras caster of
 //! [`super::octree_cast`] over mask + first-child nodes, a child found by popcount. WGSL twin:
-//! (issue 5).
+//! `kernels/src/gpu/svo.wgsl` over the shared `octree_cast.wgsl`.
 
-use scenes::Ray;
+use scenes::{Camera, Ray};
 use structures::esvo::attributes::decode_normal;
 use structures::svo::Svo;
 use structures::voxel::morton;
 
 use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
 use super::octree_ray::{OctreeRay, S_MAX};
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The breadth-first node array seen by the caster.
@@ -70,5 +71,9 @@ impl Traverse for Svo {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::svo(self))
     }
 }

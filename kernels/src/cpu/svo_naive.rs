@@ -3,15 +3,16 @@
 //! enters first, ADVANCE to the next sibling, and when the advance leaves the block, POP *one*
 //! level and ADVANCE the parent (`can_push = false`), instead of the Laine–Karras jump to the
 //! highest exited ancestor. Same mirrored frame and plane arithmetic as every voxel kernel
-//! ([`super::octree_ray`]). WGSL twin: (issue 5).
+//! ([`super::octree_ray`]). WGSL twin: `kernels/src/gpu/svo_naive.wgsl`.
 
 use glam::Vec3;
-use scenes::Ray;
+use scenes::{Camera, Ray};
 use structures::svo_naive::{EMPTY, LEAF, SvoNaive};
 
 use super::octree_cast::{CastHit, advance};
 use super::octree_ray::{OctreeRay, S_MAX};
 use super::svo::leaf_hit;
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
@@ -116,5 +117,9 @@ impl Traverse for SvoNaive {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::svo_naive(self))
     }
 }

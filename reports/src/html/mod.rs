@@ -147,13 +147,17 @@ fn run_section(out: &mut String, r: &Results) {
         );
         let _ = writeln!(out, "<li><b>command</b><code>{}</code></li>", esc(&s.command));
     }
+    for adapter in crate::gpu::adapters(r) {
+        let _ = writeln!(out, "<li><b>GPU</b>{}</li>", esc(&adapter));
+    }
     let _ = writeln!(out, "</ul>");
     let _ = writeln!(
         out,
         "<p class=\"note\">Times are medians over the timed repetitions, min–max in brackets and as whiskers. \
          N_c counts nodes or cells, N_p pointers or triangle references. Steps, visits and tests are per ray, \
          from a separate counting pass. Agreement compares primary hits with the reference on the same pixels. \
-         {} cases.</p>",
+         GPU rows: render ms is kernel time alone (upload listed under the table), steps only are counted, and \
+         agreement is with the same structure's CPU kernel. {} cases.</p>",
         r.cases.len()
     );
 }
@@ -338,7 +342,7 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
                 out,
                 "<tr><td>{label}</td><td class=\"text\">{}/{}</td><td title=\"{} bytes\">{}</td>\
                  <td>{}</td><td>{}</td><td>{:.1} [{:.1}–{:.1}]</td><td>{:.2} [{:.2}–{:.2}]</td><td>{:.2}</td><td>{:.1}</td>\
-                 <td>{:.1}</td><td>{:.1}</td><td>{:.1}</td>{}</tr>",
+                 <td>{}</td><td>{}</td><td>{:.1}</td>{}</tr>",
                 esc(&r.backend),
                 esc(&r.workload),
                 case.memory.bytes,
@@ -353,14 +357,27 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
                 t.ms_max,
                 r.mrays_per_s,
                 r.steps_per_ray_mean,
-                r.node_visits_per_ray_mean,
-                r.prim_tests_per_ray_mean,
+                per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
+                per_ray(r.counts_visits(), r.prim_tests_per_ray_mean),
                 100.0 * r.hit_fraction,
                 agreement(r.agreement.as_ref())
             );
         }
     }
     let _ = writeln!(out, "</table></div>");
+    let notes = crate::gpu::notes(cases);
+    if !notes.is_empty() {
+        let _ = writeln!(out, "<ul class=\"note\">");
+        for line in &notes {
+            let _ = writeln!(out, "<li>{}</li>", esc(line));
+        }
+        let _ = writeln!(out, "</ul>");
+    }
+}
+
+/// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).
+fn per_ray(counted: bool, mean: f64) -> String {
+    if counted { format!("{mean:.1}") } else { "—".into() }
 }
 
 /// The agreement cells: reference and pixels, mismatches (hit/miss / triangle), max t error.

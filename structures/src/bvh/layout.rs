@@ -1,4 +1,4 @@
-//! The BVH node words, exactly as the kernels read them (and the GPU will, as 8 `u32`s).
+//! The BVH node words, exactly as the kernels read them (the GPU kernel, `kernels/src/gpu/bvh.wgsl`, as 8 `u32`s).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

@@ -5,7 +5,7 @@
 //! collapse), then flattened into our own 32-byte node layout ([`layout::BvhNode`]) plus one `u32`
 //! triangle-reference array. Owning the layout lets the CPU kernel (`kernels::cpu::bvh`) count
 //! steps, node visits and triangle tests the same way the other structures do, use the shared
-//! watertight triangle test, and later upload the very same words to the GPU.
+//! watertight triangle test, and upload the very same words to the GPU (`kernels/src/gpu/bvh.wgsl`).
 
 mod build;
 pub mod layout;

@@ -1,0 +1,161 @@
+//! GPU kernels against their CPU twins (DESIGN.md §5 "GPU"): on every built-in scene, every
+//! structure of the registry that has a GPU program renders the canonical camera's 256×256 primary
+//! rays on both; hit/miss must agree on ≥ 99.9 % of the pixels and `t` within 1e-4 relative where
+//! both hit. Structures without a GPU program are listed as skipped; they are covered here the
+//! moment their `gpu_program` returns one.
+//!
+//! Runs on whatever adapter `kernels::gpu` picks — lavapipe in CI, where `.ci/run` sets
+//! ACCEL_BENCH_REQUIRE_GPU=1 so a missing adapter fails instead of skipping.
+
+use std::time::Instant;
+
+use kernels::cpu::render::{Frame, ShadeContext, Workload, render};
+use kernels::gpu::render::render_primary;
+use kernels::gpu::{DispatchOptions, context_for_tests};
+use scenes::Camera;
+use structures::{BuildInput, Params};
+
+const SIZE: u32 = 256;
+/// Hit/miss may differ on at most this fraction of the pixels.
+const MAX_HIT_MISMATCH: f64 = 1e-3;
+/// Largest relative `t` difference where both hit.
+const MAX_REL_T: f64 = 1e-4;
+
+/// How one GPU frame compares with the CPU frame of the same structure.
+#[derive(Debug, Default)]
+struct Diff {
+    pixels: u64,
+    hits: u64,
+    hit_mismatches: u64,
+    prim_mismatches: u64,
+    max_rel_t: f64,
+}
+
+fn diff(gpu: &Frame, cpu: &Frame) -> Diff {
+    let mut d = Diff::default();
+    for (x, y, c) in cpu.pixels() {
+        let g = gpu.at(x, y);
+        d.pixels += 1;
+        match (g.is_hit(), c.is_hit()) {
+            (true, true) => {
+                d.hits += 1;
+                let rel = f64::from((g.t - c.t).abs()) / f64::from(c.t.abs()).max(f64::MIN_POSITIVE);
+                d.max_rel_t = d.max_rel_t.max(rel);
+                d.prim_mismatches += u64::from(g.prim != c.prim);
+            }
+            (false, false) => {}
+            _ => d.hit_mismatches += 1,
+        }
+    }
+    d
+}
+
+fn check_scene(name: &str) {
+    let Some(ctx) = context_for_tests(&format!("gpu::{name}")) else {
+        return;
+    };
+    let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+    let shade = ShadeContext::for_scene(&scene, 0);
+    let mut failures = Vec::new();
+    for entry in kernels::STRUCTURES {
+        // Voxel structures at the small resolution the other voxel tests use.
+        let params = Params::parse(["voxel.levels=7"]).expect("params");
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let t = Instant::now();
+        let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name}/{}: {e}", entry.name));
+        if accel.gpu_program(&camera).is_none() {
+            eprintln!("gpu {name:<12} {:<10} skipped: no GPU program (built in {:.2} s)", entry.name, secs(t));
+            continue;
+        }
+        if let Some(failure) = compare(ctx, name, entry.name, accel.as_ref(), &camera, &shade, t) {
+            failures.push(failure);
+        }
+    }
+    assert!(failures.is_empty(), "{name}: GPU differs from CPU beyond the tolerance:\n{}", failures.join("\n"));
+}
+
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
+tests::per_builtin_scene!(check_scene);
+
+/// Renders `accel` on the GPU and the CPU, prints the comparison (with the time since `started`,
+/// before the build), and describes it if it fails.
+fn compare(
+    ctx: &kernels::gpu::GpuContext,
+    scene: &str,
+    label: &str,
+    accel: &dyn kernels::Accel,
+    camera: &Camera,
+    shade: &ShadeContext,
+    started: Instant,
+) -> Option<String> {
+    let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+    let cpu = render(accel, camera, shade, Workload::Primary);
+    let gpu = render_primary(ctx, accel, camera, &opts)
+        .unwrap_or_else(|e| panic!("{scene}/{label}: {e}"))
+        .expect("a GPU program");
+    let d = diff(&gpu.frame, &cpu);
+    eprintln!(
+        "gpu {scene:<12} {label:<10} {} px, {} both hit, {} hit/miss, {} other triangle, max rel t {:.1e}; \
+         upload {:.1} ms, kernel {:.1} ms; {:.2} s with build and CPU render; on {}",
+        d.pixels,
+        d.hits,
+        d.hit_mismatches,
+        d.prim_mismatches,
+        d.max_rel_t,
+        gpu.run.upload_ms,
+        gpu.run.kernel_ms.first().copied().unwrap_or(0.0),
+        secs(started),
+        ctx.adapter_info().name
+    );
+    let failed = d.hit_mismatches as f64 > MAX_HIT_MISMATCH * d.pixels as f64 || d.max_rel_t > MAX_REL_T;
+    failed.then(|| format!("{label}: {d:?}"))
+}
+
+/// ESVO's switches beyond the defaults the per-scene test builds with: the beam pre-pass (a second
+/// dispatch on the GPU, `beam_starts` on the CPU), contours off, raw attributes.
+#[test]
+fn esvo_variants() {
+    let Some(ctx) = context_for_tests("gpu::esvo_variants") else {
+        return;
+    };
+    let entry = kernels::find_structure("esvo").expect("esvo is registered");
+    let variants: [(&str, &[&str]); 3] = [
+        ("esvo+beam", &["esvo.beam=on"]),
+        ("esvo-ctr", &["esvo.contours=off", "esvo.beam=on"]),
+        ("esvo-raw", &["esvo.attributes=raw"]),
+    ];
+    let mut failures = Vec::new();
+    for name in ["bunny", "dragon-11k", "menger", "stadium"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        let build = |extra: &[&str]| {
+            let params = Params::parse(["voxel.levels=8"].iter().chain(extra).copied()).expect("params");
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
+        };
+        for (label, extra) in variants {
+            let t = Instant::now();
+            failures.extend(compare(ctx, name, label, build(extra).as_ref(), &camera, &shade, t));
+        }
+        // The pre-pass must have run: beam starts shorten the main pass's traversal. (Agreement
+        // alone cannot tell: a beam buffer left at zero lets every ray start at 0.)
+        let steps = |extra: &[&str]| {
+            let opts = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            render_primary(ctx, build(extra).as_ref(), &camera, &opts)
+                .unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
+                .and_then(|r| r.steps_per_ray())
+                .expect("counted steps")
+        };
+        let (with, without) = (steps(&["esvo.beam=on"]), steps(&[]));
+        eprintln!("gpu {name:<12} esvo main-pass steps per ray: {with:.2} with the beam, {without:.2} without");
+        if with >= without {
+            failures.push(format!("{name}: the beam pre-pass saves no steps ({with:.2} vs {without:.2})"));
+        }
+    }
+    assert!(failures.is_empty(), "ESVO variants differ from the CPU beyond the tolerance:\n{}", failures.join("\n"));
+}
