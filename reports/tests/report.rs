@@ -127,3 +127,36 @@ fn merged_runs_are_machine_tagged_in_the_report() {
     let md = markdown::report(&merged);
     assert!(md.lines().any(|l| l.starts_with("| org @ laptop |")), "{md}");
 }
+
+/// ESVO cases bring seed 000's memory budget table: each case's bytes per voxel by component
+/// beside the paper's, and the claim marked by the case's own total.
+#[test]
+fn esvo_cases_get_the_papers_memory_budget_table() {
+    let mut results = fixture();
+    assert!(!markdown::report(&results).contains("ESVO bytes per voxel"), "no ESVO case, no table");
+    let template = results.cases[0].clone();
+    for (scene, level, total) in [("bunny", 10, 6.9), ("dragon", 12, 5.5)] {
+        let mut case = template.clone();
+        case.scene = scene.into();
+        case.structure = "esvo".into();
+        case.resolution = Some(1 << level);
+        case.params = serde_json::json!({ "esvo": {
+            "params": { "contours": true, "attributes": "compressed" },
+            "bytes_per_voxel": {
+                "hierarchy": 1.22, "contours": 2.35, "colour": 1.11, "normal": 2.22, "total": total,
+                "paper": { "hierarchy": 1.0, "contours": 1.0, "colour": 1.0, "normal": 2.0, "total": 5.0 }
+            }
+        }});
+        results.cases.push(case);
+    }
+    let md = markdown::report(&results);
+    let table = &md[md.find("ESVO bytes per voxel").expect("the budget table")..];
+    assert!(
+        table.contains("| bunny | 1024 | true | compressed | 1.22 | 2.35 | 1.11 | 2.22 | 6.90 | 5.00 | **not held** |"),
+        "{table}"
+    );
+    assert!(
+        table.contains("| dragon | 4096 | true | compressed | 1.22 | 2.35 | 1.11 | 2.22 | 5.50 | 5.00 | **held** |"),
+        "{table}"
+    );
+}
