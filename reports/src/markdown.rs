@@ -163,7 +163,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
 }
 
 /// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).
-fn per_ray(counted: bool, mean: f64) -> String {
+pub(crate) fn per_ray(counted: bool, mean: f64) -> String {
     if counted { format!("{mean:.1}") } else { "—".into() }
 }
 

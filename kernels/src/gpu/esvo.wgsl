@@ -61,10 +61,8 @@ fn node_contour(node: u32, desc: vec2<u32>, slot: u32) -> ContourRef {
 }
 
 fn esvo_cast(ray: Ray, t_min: f32, contours: bool, lod_k: f32) -> CastHit {
-    let grid_origin = vec3<f32>(bitcast<f32>(params(0u)), bitcast<f32>(params(1u)), bitcast<f32>(params(2u)));
-    let inv_size = bitcast<f32>(params(3u));
-    let o = to_octree_origin(ray.origin, grid_origin, inv_size);
-    return octree_cast(o, ray.dir * inv_size, t_min, ray.t_max, contours, lod_k);
+    let r = to_octree_space(ray);
+    return octree_cast(r.o, r.d, t_min, ray.t_max, contours, lod_k);
 }
 
 // Beam pre-pass: one invocation per corner of the beam_block × beam_block pixel blocks, casting
@@ -113,23 +111,13 @@ fn beam_start(px: vec2<u32>) -> f32 {
 }
 
 fn trace(ray: Ray, index: u32) -> TraceResult {
-    var out: TraceResult;
-    out.hit = false;
     let flags = params(ESVO_FLAGS);
     if ((flags & 1u) == 0u) {
-        return out;
+        return no_hit();
     }
     var t_min = ray.t_min;
     if ((flags & 4u) != 0u) {
         t_min = max(t_min, beam_start(pixel_of(index)));
     }
-    let h = esvo_cast(ray, t_min, (flags & 2u) != 0u, 0.0);
-    if (h.hit) {
-        out.hit = true;
-        out.t = h.t;
-        let code = cube_morton(h.pos, h.scale, h.mirror);
-        out.prim_lo = code.x;
-        out.prim_hi = code.y;
-    }
-    return out;
+    return voxel_trace_result(esvo_cast(ray, t_min, (flags & 2u) != 0u, 0.0));
 }

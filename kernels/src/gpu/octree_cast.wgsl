@@ -65,14 +65,13 @@ fn contour_span(contour: u32, cube_min: vec3<f32>, size: f32, o: vec3<f32>, d: v
 // active span, `lod_k` > 0 stops at a voxel whose side is at most lod_k · t (octree units).
 fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contours: bool, lod_k: f32) -> CastHit {
     let r = octree_ray(o, d);
-    var res: CastHit;
-    res.hit = false;
-    res.mirror = r.mirror;
+    var miss: CastHit;
+    miss.hit = false;
     let span = root_span(r, t_min_in, t_max_in);
     var t_min = span.x;
     var t_max = span.y;
     if (t_min > t_max) {
-        return res;
+        return miss;
     }
     // (parent, t_max) per scale; scale S_MAX − 1 is the root's children.
     var stack_node: array<u32, 24>;
@@ -110,13 +109,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
         if (node_valid(desc, slot) && t_min <= t_max) {
             // LOD: the voxel is small enough for the pixel it covers.
             if (lod_k > 0.0 && scale_exp2 <= tc_max * lod_k) {
-                res.hit = true;
-                res.t = t_min;
-                res.parent = parent;
-                res.slot = slot;
-                res.pos = pos;
-                res.scale = scale;
-                return res;
+                return CastHit(true, t_min, parent, slot, pos, scale, r.mirror);
             }
             // INTERSECT: the span inside this cube, narrowed by the voxel's contour.
             var tv_max = min(t_max, tc_max);
@@ -132,13 +125,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             }
             if (t_min <= tv_max) {
                 if (node_leaf(desc, slot, scale)) {
-                    res.hit = true;
-                    res.t = t_min;
-                    res.parent = parent;
-                    res.slot = slot;
-                    res.pos = pos;
-                    res.scale = scale;
-                    return res;
+                    return CastHit(true, t_min, parent, slot, pos, scale, r.mirror);
                 }
                 // PUSH
                 if (tc_max < h) {
@@ -178,7 +165,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             }
             scale = firstLeadingBit(differing);
             if (differing == 0u || scale >= S_MAX) {
-                return res;
+                return miss;
             }
             scale_exp2 = bitcast<f32>((scale + 127u - S_MAX) << 23u);
             parent = stack_node[scale];
@@ -193,5 +180,14 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             have_desc = false;
         }
     }
-    return res;
+    return miss;
+}
+
+// A cast's hit as the primitive every voxel kernel reports: t and the hit cube's Morton code.
+fn voxel_trace_result(h: CastHit) -> TraceResult {
+    if (!h.hit) {
+        return no_hit();
+    }
+    let code = cube_morton(h.pos, h.scale, h.mirror);
+    return TraceResult(true, h.t, code.x, code.y);
 }

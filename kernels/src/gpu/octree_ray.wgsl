@@ -101,8 +101,17 @@ fn cube_morton(pos: vec3<f32>, scale: u32, mirror: u32) -> vec2<u32> {
     return code;
 }
 
-// A voxel structure's grid: world → octree space, as structures::voxel::VoxelGrid::to_octree_space.
-// `inv_size` is 1/size computed on the CPU, so the transform is bit-identical.
-fn to_octree_origin(origin: vec3<f32>, grid_origin: vec3<f32>, inv_size: f32) -> vec3<f32> {
-    return (origin - grid_origin) * inv_size + vec3<f32>(1.0);
+// A ray in octree space (the cube is [1, 2]³).
+struct OctreeSpaceRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+}
+
+// World → octree space through the voxel grid every voxel kernel's `params` starts with (origin,
+// then 1/size, both f32 bits; kernels/src/gpu/voxel.rs), as VoxelGrid::to_octree_space does it:
+// 1/size is computed on the CPU, so the transform is bit-identical.
+fn to_octree_space(ray: Ray) -> OctreeSpaceRay {
+    let grid_origin = vec3<f32>(bitcast<f32>(params(0u)), bitcast<f32>(params(1u)), bitcast<f32>(params(2u)));
+    let inv_size = bitcast<f32>(params(3u));
+    return OctreeSpaceRay((ray.origin - grid_origin) * inv_size + vec3<f32>(1.0), ray.dir * inv_size);
 }

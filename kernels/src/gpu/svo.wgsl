@@ -30,21 +30,9 @@ fn node_contour(node: u32, desc: vec2<u32>, slot: u32) -> ContourRef {
 }
 
 fn trace(ray: Ray, index: u32) -> TraceResult {
-    var out: TraceResult;
-    out.hit = false;
     if (params(5u) == 0u) {
-        return out;
+        return no_hit();
     }
-    let grid_origin = vec3<f32>(bitcast<f32>(params(0u)), bitcast<f32>(params(1u)), bitcast<f32>(params(2u)));
-    let inv_size = bitcast<f32>(params(3u));
-    let o = to_octree_origin(ray.origin, grid_origin, inv_size);
-    let h = octree_cast(o, ray.dir * inv_size, ray.t_min, ray.t_max, false, 0.0);
-    if (h.hit) {
-        out.hit = true;
-        out.t = h.t;
-        let code = cube_morton(h.pos, h.scale, h.mirror);
-        out.prim_lo = code.x;
-        out.prim_hi = code.y;
-    }
-    return out;
+    let r = to_octree_space(ray);
+    return voxel_trace_result(octree_cast(r.o, r.d, ray.t_min, ray.t_max, false, 0.0));
 }

@@ -11,20 +11,16 @@ const NAIVE_EMPTY: u32 = 0u;
 const NAIVE_LEAF: u32 = 0xffffffffu;
 
 fn trace(ray: Ray, index: u32) -> TraceResult {
-    var out: TraceResult;
-    out.hit = false;
     if (params(5u) == 0u) {
-        return out;
+        return no_hit();
     }
-    let grid_origin = vec3<f32>(bitcast<f32>(params(0u)), bitcast<f32>(params(1u)), bitcast<f32>(params(2u)));
-    let inv_size = bitcast<f32>(params(3u));
-    let o = to_octree_origin(ray.origin, grid_origin, inv_size);
-    let r = octree_ray(o, ray.dir * inv_size);
+    let os = to_octree_space(ray);
+    let r = octree_ray(os.o, os.d);
     let span = root_span(r, ray.t_min, ray.t_max);
     var t_min = span.x;
     var t_max = span.y;
     if (t_min > t_max) {
-        return out;
+        return no_hit();
     }
     // Per depth: the block holding the current cube's slot and the span bound on entering it.
     var stack_block: array<u32, 24>;
@@ -50,12 +46,8 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
         let tc_max = min(min(corner.x, corner.y), corner.z);
         if (can_push && entry != NAIVE_EMPTY && t_min <= min(t_max, tc_max)) {
             if (entry == NAIVE_LEAF) {
-                out.hit = true;
-                out.t = t_min;
                 let code = cube_morton(pos, S_MAX - depth, r.mirror);
-                out.prim_lo = code.x;
-                out.prim_hi = code.y;
-                return out;
+                return TraceResult(true, t_min, code.x, code.y);
             }
             // PUSH
             stack_block[depth] = block;
@@ -82,7 +74,7 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
         if ((idx & step_mask) != 0u) {
             // POP one level: back to the parent's cube, which is then advanced, not re-entered.
             if (depth == 1u) {
-                return out;
+                return no_hit();
             }
             depth -= 1u;
             block = stack_block[depth];
@@ -104,5 +96,5 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
             can_push = true;
         }
     }
-    return out;
+    return no_hit();
 }

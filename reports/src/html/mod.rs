@@ -9,6 +9,7 @@ use std::fmt::Write;
 
 use base64::Engine;
 
+use crate::markdown::per_ray;
 use crate::merge;
 use crate::plots::{self, Bars};
 use crate::scaling::{self, Axis};
@@ -373,11 +374,6 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
         }
         let _ = writeln!(out, "</ul>");
     }
-}
-
-/// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).
-fn per_ray(counted: bool, mean: f64) -> String {
-    if counted { format!("{mean:.1}") } else { "—".into() }
 }
 
 /// The agreement cells: reference and pixels, mismatches (hit/miss / triangle), max t error.
