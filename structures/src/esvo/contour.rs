@@ -129,7 +129,9 @@ impl Contour {
     /// exactly as a kernel would.
     pub fn slab(&self, lo: Vec3, s: f32) -> (Vec3, f32, f32) {
         let [nx, ny, nz] = self.normal();
-        let plane_normal = Vec3::new(nx as f32, ny as f32, nz as f32) / s;
+        // `s` is a power of two, so multiplying by its reciprocal is exact: the same N as `n / s`
+        // for one division instead of three.
+        let plane_normal = Vec3::new(nx as f32, ny as f32, nz as f32) * (1.0 / s);
         let centre = lo + Vec3::splat(0.5 * s);
         let mid = plane_normal.dot(centre) + self.position() as f32 * CPOS;
         let half = self.thickness() as f32 * CHALF;
