@@ -1011,6 +1011,33 @@ mod tests {
         assert_eq!(decode_axis_vector(0), Vec3::ZERO);
     }
 
+    /// The encoder tries two exponents and both signs; an exhaustive search over every
+    /// (exponent, sign, clamped rounding) must find nothing nearer.
+    #[test]
+    fn axis_vector_is_the_nearest_of_all_encodings() {
+        let mut rng = Pcg64Mcg::seed_from_u64(17);
+        for _ in 0..20_000 {
+            let scale = exp2i(rng.random_range(-18..3)) * rng.random_range(0.5f32..2.0);
+            let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                * scale;
+            let got = decode_axis_vector(encode_axis_vector(v));
+            let error = got.distance_squared(v).min(got.distance_squared(-v));
+            for exp in 0..=AXIS_EXP_MAX {
+                let step = exp2i(exp as i32 - AXIS_EXP_BIAS);
+                for signed in [v, -v] {
+                    let ints = (signed / step)
+                        .round()
+                        .clamp(Vec3::splat(AXIS_INT_MIN as f32), Vec3::splat(AXIS_INT_MAX as f32));
+                    let other = (ints * step).distance_squared(signed);
+                    assert!(
+                        error <= other * (1.0 + 1e-6) + f32::MIN_POSITIVE,
+                        "{v}: {error} vs {other} at exponent {exp}"
+                    );
+                }
+            }
+        }
+    }
+
     // ---- compressed block layout ----
 
     #[test]
