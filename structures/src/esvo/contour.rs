@@ -189,8 +189,9 @@ pub fn fit(triangles: &[[Vec3; 3]], lo: Vec3, s: f32, params: &FitParams) -> Opt
     let cube = Cube::new(lo, s);
     let mut points = Vec::new();
     let mut areas = Vec::new();
+    let mut scratch = [Polygon::empty(), Polygon::empty()];
     for triangle in triangles {
-        let polygon = cube.clip(triangle.map(|v| v.as_dvec3()));
+        let polygon = cube.clip(triangle.map(|v| v.as_dvec3()), &mut scratch);
         if polygon.overflowed {
             // Never seen; stay conservative: this triangle may be anywhere in the cube.
             points.extend_from_slice(&cube.corners());
@@ -342,14 +343,26 @@ impl Cube {
     /// Sutherland–Hodgman against the 6 planes. Inside tests are inclusive, so a triangle that
     /// only touches a face, edge or corner keeps a degenerate polygon (segment or point), and
     /// one lying in a face plane is kept whole. Intersection points are snapped onto the plane.
-    fn clip(&self, triangle: [DVec3; 3]) -> Polygon {
-        let mut polygon = Polygon::empty();
-        triangle.into_iter().for_each(|v| polygon.push(v));
+    /// The two polygons of `scratch` take turns as input and output (no polygon is copied), and
+    /// a plane with every vertex inside is skipped: it would return the polygon unchanged.
+    fn clip<'s>(&self, triangle: [DVec3; 3], scratch: &'s mut [Polygon; 2]) -> &'s Polygon {
+        let [a, b] = scratch;
+        let (mut src, mut dst) = (a, b);
+        src.len = 0;
+        src.overflowed = false;
+        triangle.into_iter().for_each(|v| src.push(v));
         for axis in 0..3 {
-            polygon = clip_plane(&polygon, axis, self.lo[axis], |c| c >= self.lo[axis]);
-            polygon = clip_plane(&polygon, axis, self.hi[axis], |c| c <= self.hi[axis]);
+            let (lo, hi) = (self.lo[axis], self.hi[axis]);
+            if src.vertices().iter().any(|v| v[axis] < lo) {
+                clip_plane(src, dst, axis, lo, |c| c >= lo);
+                std::mem::swap(&mut src, &mut dst);
+            }
+            if src.vertices().iter().any(|v| v[axis] > hi) {
+                clip_plane(src, dst, axis, hi, |c| c <= hi);
+                std::mem::swap(&mut src, &mut dst);
+            }
         }
-        polygon
+        src
     }
 
     /// The 8 corners: a bound for whatever lies in the cube.
@@ -361,10 +374,11 @@ impl Cube {
     }
 }
 
-/// One Sutherland–Hodgman step: keeps the part of `polygon` whose coordinate `axis` satisfies
-/// `inside`, the boundary being `coordinate == plane`.
-fn clip_plane(polygon: &Polygon, axis: usize, plane: f64, inside: impl Fn(f64) -> bool) -> Polygon {
-    let mut out = Polygon { overflowed: polygon.overflowed, ..Polygon::empty() };
+/// One Sutherland–Hodgman step: writes to `out` the part of `polygon` whose coordinate `axis`
+/// satisfies `inside`, the boundary being `coordinate == plane`.
+fn clip_plane(polygon: &Polygon, out: &mut Polygon, axis: usize, plane: f64, inside: impl Fn(f64) -> bool) {
+    out.len = 0;
+    out.overflowed = polygon.overflowed;
     let vs = polygon.vertices();
     for (i, &a) in vs.iter().enumerate() {
         let b = vs[(i + 1) % vs.len()];
@@ -380,7 +394,6 @@ fn clip_plane(polygon: &Polygon, axis: usize, plane: f64, inside: impl Fn(f64) -
             out.push(x);
         }
     }
-    out
 }
 
 #[cfg(test)]
@@ -612,7 +625,8 @@ mod tests {
             }
             for triangle in &triangles {
                 // The clipped polygon's corners are where the surface reaches furthest along n.
-                let polygon = Cube::new(lo, s).clip(triangle.map(|v| v.as_dvec3()));
+                let polygon =
+                    *Cube::new(lo, s).clip(triangle.map(|v| v.as_dvec3()), &mut [Polygon::empty(), Polygon::empty()]);
                 let corners = polygon.vertices().iter().map(|v| v.as_vec3());
                 for x in sample(&mut rng, triangle, 300).into_iter().chain(corners) {
                     if !inside(lo, s, x) {
@@ -665,7 +679,8 @@ mod tests {
             let Some(f) = fit(&[triangle], lo, s, &FitParams::default()) else {
                 panic!("case {case}: no contour for plane {n:?}");
             };
-            let polygon = Cube::new(lo, s).clip(triangle.map(|v| v.as_dvec3()));
+            let polygon =
+                *Cube::new(lo, s).clip(triangle.map(|v| v.as_dvec3()), &mut [Polygon::empty(), Polygon::empty()]);
             let corners = polygon.vertices().iter().map(|v| v.as_vec3());
             for x in sample(&mut rng, &triangle, 100).into_iter().chain(corners) {
                 if inside(lo, s, x) {
