@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use scenes::Scene;
 
 use super::attributes::{CompressedBlock, compress_block, encode_abgr, encode_normal};
-use super::contour::{FitParams, fit};
+use super::contour::{FitParams, FitScratch, fit_with};
 use super::layout::*;
 use super::{Attributes, Esvo, EsvoParams, EsvoStats};
 use crate::voxel::{self, Octree};
@@ -61,7 +61,7 @@ fn fit_contours(scene: &Scene, tree: &Octree, max_ratio: f32) -> Vec<Vec<u32>> {
         let expanded: Vec<(u32, Vec<Voxel<Vec<u32>>>)> = frontier
             .par_iter()
             .map(|v| {
-                let (word, inherited) = fitter.fit_voxel(level, v, &mut Vec::new());
+                let (word, inherited) = fitter.fit_voxel(level, v, &mut FitBuffers::default());
                 let mut children = Vec::new();
                 fitter.for_each_child(level, v, inherited, &mut Vec::new(), |child, list| {
                     children.push(child.with(list.to_vec()))
@@ -125,7 +125,14 @@ struct Fill {
     words: Vec<Vec<u32>>,
     /// Per level: a child's candidate triangles, reused.
     lists: Vec<Vec<u32>>,
+    scratch: FitBuffers,
+}
+
+/// What fitting one voxel reuses: its triangles' corners and `fit`'s own buffers.
+#[derive(Default)]
+struct FitBuffers {
     corners: Vec<[Vec3; 3]>,
+    fit: FitScratch,
 }
 
 impl Fill {
@@ -145,7 +152,7 @@ impl Fill {
                     ..node.first_child[last] as usize + node.masks[last].count_ones() as usize;
             }
         }
-        Fill { first, words, lists: vec![Vec::new(); levels], corners: Vec::new() }
+        Fill { first, words, lists: vec![Vec::new(); levels], scratch: FitBuffers::default() }
     }
 }
 
@@ -153,16 +160,17 @@ impl ContourFitter<'_> {
     /// The contour word of voxel `v` at `level` (0: none) and the inherited thickness its
     /// children see. No contour where its ancestors' slab already pins the surface to a
     /// fraction of the voxel ("store one only where it tightens the bound meaningfully").
-    fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, corners: &mut Vec<[Vec3; 3]>) -> (u32, f32) {
+    fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, buffers: &mut FitBuffers) -> (u32, f32) {
         let side = (-(level as f32)).exp2();
         if level == 0 || v.inherited <= INHERITED_ENOUGH * side {
             return (0, v.inherited);
         }
         let c = v.coords;
         let lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
+        let FitBuffers { corners, fit } = buffers;
         corners.clear();
         corners.extend(v.triangles.as_ref().iter().map(|&t| self.triangles[t as usize]));
-        match fit(corners, lo, side, &self.params) {
+        match fit_with(corners, lo, side, &self.params, fit) {
             Some(f) => (f.contour.0, v.inherited.min(slab_thickness(f.contour, side))),
             None => (0, v.inherited),
         }
@@ -202,7 +210,7 @@ impl ContourFitter<'_> {
 
     /// Fits `v` at `level` and, depth-first, its whole subtree into `fill`.
     fn visit<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, fill: &mut Fill) {
-        let (word, inherited) = self.fit_voxel(level, v, &mut fill.corners);
+        let (word, inherited) = self.fit_voxel(level, v, &mut fill.scratch);
         fill.words[level][v.index - fill.first[level]] = word;
         if level + 1 == self.tree.levels.len() {
             return;

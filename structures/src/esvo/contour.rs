@@ -186,12 +186,31 @@ pub struct Fitted {
 /// Returns `None` if nothing of the triangles lies in the cube, or if no candidate keeps at most
 /// `params.max_ratio` of the cube.
 pub fn fit(triangles: &[[Vec3; 3]], lo: Vec3, s: f32, params: &FitParams) -> Option<Fitted> {
+    fit_with(triangles, lo, s, params, &mut FitScratch::default())
+}
+
+/// Buffers [`fit_with`] reuses from call to call (a builder fitting millions of voxels).
+#[derive(Default)]
+pub struct FitScratch {
+    points: Vec<DVec3>,
+    areas: Vec<DVec3>,
+}
+
+/// [`fit`] with its buffers in `scratch`.
+pub fn fit_with(
+    triangles: &[[Vec3; 3]],
+    lo: Vec3,
+    s: f32,
+    params: &FitParams,
+    scratch: &mut FitScratch,
+) -> Option<Fitted> {
     let cube = Cube::new(lo, s);
-    let mut points = Vec::new();
-    let mut areas = Vec::new();
-    let mut scratch = [Polygon::empty(), Polygon::empty()];
+    let FitScratch { points, areas } = scratch;
+    points.clear();
+    areas.clear();
+    let mut polygons = [Polygon::empty(), Polygon::empty()];
     for triangle in triangles {
-        let polygon = cube.clip(triangle.map(|v| v.as_dvec3()), &mut scratch);
+        let polygon = cube.clip(triangle.map(|v| v.as_dvec3()), &mut polygons);
         if polygon.overflowed {
             // Never seen; stay conservative: this triangle may be anywhere in the cube.
             points.extend_from_slice(&cube.corners());
@@ -207,7 +226,7 @@ pub fn fit(triangles: &[[Vec3; 3]], lo: Vec3, s: f32, params: &FitParams) -> Opt
         return None;
     }
 
-    let mean = mean_normal(&areas);
+    let mean = mean_normal(areas);
     let candidates =
         [mean, DVec3::X, DVec3::Y, DVec3::Z].into_iter().chain(params.extra_directions.iter().map(|d| d.as_dvec3()));
     let mut best: Option<Fitted> = None;
@@ -215,7 +234,7 @@ pub fn fit(triangles: &[[Vec3; 3]], lo: Vec3, s: f32, params: &FitParams) -> Opt
         let Some(n) = quantise(direction) else {
             continue;
         };
-        let Some(fitted) = fit_along(&points, &cube, n) else {
+        let Some(fitted) = fit_along(points, &cube, n) else {
             continue;
         };
         if best.is_none_or(|b| fitted.ratio < b.ratio) {
