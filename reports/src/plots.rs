@@ -80,27 +80,9 @@ pub fn grouped_bars(title: &str, y_label: &str, categories: &[String], series: &
         .flat_map(|s| s.values.iter().copied().chain(s.ranges.iter().flatten().map(|r| r.1)))
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max);
-    let n = categories.len();
     let k = series.len();
     svg(title, BAR_SIZE, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, TITLE_FONT)
-            .margin(10)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..n as f64, 0.0..nice_top(top, if k > 1 { k } else { 0 }))
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(0)
-            .y_label_formatter(&|y| significant(*y))
-            .y_desc(y_label)
-            .label_style(LABEL_FONT)
-            .axis_desc_style(LABEL_FONT)
-            .draw()
-            .map_err(e)?;
-        category_labels(root, &chart, categories)?;
+        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top, if k > 1 { k } else { 0 }))?;
         let width = 0.8 / k.max(1) as f64;
         for (si, s) in series.iter().enumerate() {
             let fill = color(si);
@@ -149,24 +131,7 @@ pub fn stacked_bars(
     let top = (0..n).map(|ci| components.iter().map(|(_, v)| v.get(ci).copied().unwrap_or(0.0)).sum::<f64>());
     let top = top.fold(0.0f64, f64::max);
     svg(title, BAR_SIZE, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, TITLE_FONT)
-            .margin(10)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..n as f64, 0.0..nice_top(top, components.len()))
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(0)
-            .y_label_formatter(&|y| significant(*y))
-            .y_desc(y_label)
-            .label_style(LABEL_FONT)
-            .axis_desc_style(LABEL_FONT)
-            .draw()
-            .map_err(e)?;
-        category_labels(root, &chart, categories)?;
+        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top, components.len()))?;
         let mut base = vec![0.0; n];
         for (i, (name, values)) in components.iter().enumerate() {
             let fill = color(i);
@@ -255,6 +220,36 @@ pub fn scaling(study: &Study) -> Result<String, PlotError> {
 }
 
 type BarChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The frame every bar chart shares: caption, one slot per category on x (labelled beneath),
+/// `0..y_top` on y with its mesh and description.
+fn bar_frame<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    y_top: f64,
+) -> Result<BarChart<'a, 'b>, String> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, TITLE_FONT)
+        .margin(10)
+        .x_label_area_size(36)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..categories.len() as f64, 0.0..y_top)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_label_formatter(&|y| significant(*y))
+        .y_desc(y_label)
+        .label_style(LABEL_FONT)
+        .axis_desc_style(LABEL_FONT)
+        .draw()
+        .map_err(e)?;
+    category_labels(root, &chart, categories)?;
+    Ok(chart)
+}
 
 /// Writes each category's name under the centre of its bar group; on two alternating rows when
 /// the names would collide.
