@@ -5,10 +5,10 @@
 // of §6.2 as a pre-pass dispatch (`esvo_beam`) whose per-corner distances the main pass reads
 // from `scratch`.
 //
-// Buffers: `params` (see ESVO_* below), `words` = the structure's whole word array (descriptors,
+// Buffers: `params` (words 0–4 the voxel grid, see octree_ray.wgsl; then ESVO_* below), `words` =
+// the structure's whole word array (descriptors,
 // far pointers, page headers, info section, contours, attachments), uploaded as built.
 
-const ESVO_LEVEL: u32 = 4u;
 const ESVO_ROOT: u32 = 5u;
 const ESVO_CONTOUR_BASE: u32 = 6u;
 // Bit 0: non-empty; bit 1: intersect contours; bit 2: beam pre-pass ran.

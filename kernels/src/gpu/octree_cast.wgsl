@@ -20,9 +20,6 @@ struct ContourRef {
 struct CastHit {
     hit: bool,
     t: f32,
-    // The node holding the hit voxel's slot, and that world slot.
-    parent: u32,
-    slot: u32,
     // The hit cube in the mirrored frame: minimum corner and scale.
     pos: vec3<f32>,
     scale: u32,
@@ -109,7 +106,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
         if (node_valid(desc, slot) && t_min <= t_max) {
             // LOD: the voxel is small enough for the pixel it covers.
             if (lod_k > 0.0 && scale_exp2 <= tc_max * lod_k) {
-                return CastHit(true, t_min, parent, slot, pos, scale, r.mirror);
+                return CastHit(true, t_min, pos, scale, r.mirror);
             }
             // INTERSECT: the span inside this cube, narrowed by the voxel's contour.
             var tv_max = min(t_max, tc_max);
@@ -125,7 +122,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             }
             if (t_min <= tv_max) {
                 if (node_leaf(desc, slot, scale)) {
-                    return CastHit(true, t_min, parent, slot, pos, scale, r.mirror);
+                    return CastHit(true, t_min, pos, scale, r.mirror);
                 }
                 // PUSH
                 if (tc_max < h) {
