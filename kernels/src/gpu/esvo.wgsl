@@ -5,9 +5,9 @@
 // of §6.2 as a pre-pass dispatch (`esvo_beam`) whose per-corner distances the main pass reads
 // from `scratch`.
 //
-// Buffers: `params` (words 0–4 the voxel grid, see octree_ray.wgsl; then ESVO_* below), `words` =
-// the structure's whole word array (descriptors,
-// far pointers, page headers, info section, contours, attachments), uploaded as built.
+// Buffers: `params` (words 0–4 the voxel grid, see octree_ray.wgsl; then ESVO_* below) and
+// `words`, the structure's whole word array (descriptors, far pointers, page headers, info
+// section, contours, attachments), uploaded as built.
 
 const ESVO_ROOT: u32 = 5u;
 const ESVO_CONTOUR_BASE: u32 = 6u;
