@@ -35,18 +35,21 @@
 //! | compressed, sphere of radius 40 voxels (spread < 5°) | 0.16 | 0.79 | 6.2 |
 //! | compressed, sphere of radius 400 voxels | 0.016 | 0.083 | 9.4 |
 //! | compressed, sphere of radius 4000 voxels | 0.0022 | 0.0087 | 12.7 |
-//! | compressed, one-direction arc ≤ 10° | 0.077 | 0.56 | 6.7 |
+//! | compressed, one-direction arc ≤ 10° | 0.078 | 0.54 | 6.7 |
 //! | compressed, 16 random within 1° of an axis | 0.12 | 0.45 | 7.0 |
 //! | compressed, 16 random unit normals | 20 | 90 | — |
 //!
 //! So the compressed normals keep the uncompressed ~14 bits where the normals of a block agree
 //! and lose precision in proportion to their spread: the 4-bit mantissas of `n_u`, `n_v` round
 //! to ~1/8 of their length, and a voxel staircase is no exact 4×4 grid. Colours: RGB565 rounding
-//! of the endpoints (half-step 0.016) on the palette line, measured max 0.017 per channel; 16 random colours, mean
-//! 0.27, max 0.69 per channel. `compress_block` takes ~4 µs per block on the 2-core dev machine.
+//! of the endpoints (half-step 0.016) on the palette line, measured max 0.017 per channel; 16
+//! random colours, mean 0.27, max 0.69 per channel. The fit itself is [`super::compress`];
+//! `compress_block` takes ~1.6 µs per block on the 2-core dev machine.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat3, Vec3};
+use glam::Vec3;
+
+pub use super::compress::compress_block;
 
 // ---------------------------------------------------------------------------------------------
 // Uncompressed colour (§5.4, Fig. 7a)
@@ -170,7 +173,7 @@ const fn snorm_max(bits: u32) -> u32 {
 /// A coordinate in [−1, 1] (clamped) to an N-bit offset-binary snorm field, rounded to nearest.
 fn encode_snorm(x: f32, bits: u32) -> u32 {
     let max = snorm_max(bits) as f32;
-    let s = (x.clamp(-1.0, 1.0) * max).round() as i32;
+    let s = round_nearest(x.clamp(-1.0, 1.0) * max) as i32;
     (s + (1 << (bits - 1))) as u32
 }
 
@@ -279,7 +282,7 @@ pub fn color_palette(endpoints: u32) -> [Vec3; 4] {
 /// RGB in [0, 1]³ (clamped) to RGB565, each channel rounded to nearest.
 pub fn encode_rgb565(color: Vec3) -> u32 {
     let c = saturate(color);
-    let level = |x: f32, bits: u32| (x * ((1 << bits) - 1) as f32).round() as u32;
+    let level = |x: f32, bits: u32| round_nearest(x * ((1 << bits) - 1) as f32) as u32;
     level(c.x, RGB565_RB_BITS) << RGB565_R_SHIFT
         | level(c.y, RGB565_G_BITS) << RGB565_G_SHIFT
         | level(c.z, RGB565_RB_BITS) << RGB565_B_SHIFT
@@ -319,17 +322,30 @@ pub fn encode_axis_vector(v: Vec3) -> u32 {
     }
     let (lowest, highest) = (Vec3::splat(AXIS_INT_MIN as f32), Vec3::splat(AXIS_INT_MAX as f32));
     let step = |exp: u32| exp2i(exp as i32 - AXIS_EXP_BIAS);
+    // v in steps of 2^(exp − bias), rounded: a multiply by a power of two, as exact as dividing.
+    let steps = |exp: u32| round_vec(v * exp2i(AXIS_EXP_BIAS - exp as i32));
     let fits = |ints: Vec3| ints.cmpge(lowest).all() && ints.cmple(highest).all();
-    let smallest = (0..=AXIS_EXP_MAX)
+    // Below 2^k ≤ max|v|/7.5 < 2^(k+1) no exponent fits: at exp − bias ≤ k − 1 the longest
+    // component rounds to ≥ 15 steps, beyond −8..7 for either sign. So the search starts there.
+    let longest = v.abs().max_element() / 7.5;
+    let first = if longest >= f32::MIN_POSITIVE {
+        let k = ((longest.to_bits() >> 23) & 0xff) as i32 - 127;
+        (k + AXIS_EXP_BIAS).clamp(0, AXIS_EXP_MAX as i32) as u32
+    } else {
+        0
+    };
+    let smallest = (first..=AXIS_EXP_MAX)
         .find(|&exp| {
-            let ints = (v / step(exp)).round();
+            let ints = steps(exp);
             fits(ints) || fits(-ints)
         })
         .unwrap_or(AXIS_EXP_MAX);
     let mut best = (f32::INFINITY, 0);
     for exp in smallest.saturating_sub(1)..=smallest {
-        for signed in [v, -v] {
-            let ints = (signed / step(exp)).round().clamp(lowest, highest);
+        // Rounding ties to even is symmetric, so −v rounds to −ints.
+        let ints = steps(exp);
+        for (signed, ints) in [(v, ints), (-v, -ints)] {
+            let ints = ints.clamp(lowest, highest);
             let error = (ints * step(exp)).distance_squared(signed);
             if error < best.0 {
                 best = (error, pack_axis_vector(ints, exp));
@@ -347,14 +363,14 @@ fn pack_axis_vector(ints: Vec3, exp: u32) -> u32 {
 
 /// The decoded normal grid of Fig. 10: candidate (i, j) = normalise(n_b + c_i·n_u + c_j·n_v).
 #[derive(Clone, Copy, Debug)]
-struct NormalGrid {
-    base: Vec3,
-    u: Vec3,
-    v: Vec3,
+pub(super) struct NormalGrid {
+    pub(super) base: Vec3,
+    pub(super) u: Vec3,
+    pub(super) v: Vec3,
 }
 
 impl NormalGrid {
-    fn from_words(base: u32, axes: u32) -> Self {
+    pub(super) fn from_words(base: u32, axes: u32) -> Self {
         NormalGrid {
             base: decode_normal_cube(base),
             u: decode_axis_vector(field(axes, 0, HALF_WORD_SHIFT)),
@@ -374,369 +390,6 @@ impl NormalGrid {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Compression (§5.5): fitting the endpoints and the normal grid
-// ---------------------------------------------------------------------------------------------
-
-/// Power-iteration steps for the principal axes (3×3, so each step is a handful of flops).
-const POWER_ITERATIONS: usize = 6;
-/// Normals are projected onto the tangent plane of their mean when all lie within 60° of it;
-/// beyond, each goes onto its own cube face (see `project_normals`).
-const TANGENT_PLANE_MIN_COS: f32 = 0.5;
-/// For normals varying along one direction, `n_u` and `n_v` are stacked along it with lengths
-/// 0.8 : 0.2 of the half-extent, which spreads the 16 candidates evenly over it (§5.5: "same
-/// direction but different lengths").
-const STACKED_SHARES: (f32, f32) = (0.8, 0.2);
-/// Lloyd passes (assign, then least-squares refit) per initial grid, before quantisation.
-const LLOYD_PASSES: usize = 4;
-/// Lloyd passes after quantisation, against the true normals.
-const QUANTISED_PASSES: usize = 2;
-/// Pull of a refit towards the previous axis vectors, so a direction the picks do not
-/// constrain (all slots on one grid row) stays put instead of making the system singular.
-const REFIT_RIDGE: f32 = 1e-3;
-
-/// Compresses the colours (linear RGB in [0, 1]) and unit normals of 16 child slots (§5.5).
-/// `None` slots are empty: they are left out of the fit and decode to whatever the block gives
-/// them. Deterministic; allocation-free; a few microseconds per block.
-pub fn compress_block(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> CompressedBlock {
-    let used = UsedSlots::gather(values);
-    let (endpoints, color_indices) = compress_colors(&used);
-    let (base, axes, u_indices, v_indices) = compress_normals(&used);
-    CompressedBlock([endpoints, color_indices, base, axes, u_indices, v_indices])
-}
-
-/// The non-empty slots of a block, packed to the front; allocation-free.
-struct UsedSlots {
-    count: usize,
-    slot: [usize; BLOCK_SLOTS],
-    color: [Vec3; BLOCK_SLOTS],
-    normal: [Vec3; BLOCK_SLOTS],
-}
-
-impl UsedSlots {
-    fn gather(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> Self {
-        let mut used = UsedSlots {
-            count: 0,
-            slot: [0; BLOCK_SLOTS],
-            color: [Vec3::ZERO; BLOCK_SLOTS],
-            normal: [Vec3::Z; BLOCK_SLOTS],
-        };
-        for (slot, value) in values.iter().enumerate() {
-            if let Some((color, normal)) = value {
-                used.slot[used.count] = slot;
-                used.color[used.count] = saturate(*color);
-                used.normal[used.count] = if normal.is_finite() { normal.normalize_or(Vec3::Z) } else { Vec3::Z };
-                used.count += 1;
-            }
-        }
-        used
-    }
-}
-
-/// Colour part (words 0–1): endpoints at the extremes of the used colours along their principal
-/// axis, or that range extended by half on one side (colours on only three of the four palette
-/// positions have an inner entry as an extreme); each slot takes its nearest palette entry, and
-/// a least-squares refit of the endpoints to those picks follows. The least squared error wins.
-fn compress_colors(used: &UsedSlots) -> (u32, u32) {
-    let colors = &used.color[..used.count];
-    if colors.is_empty() {
-        return (0, 0);
-    }
-    let mean = mean(colors);
-    let axis = principal_axis(covariance(colors, mean));
-    let (lo, hi) = extent(colors, mean, axis);
-    let half = 0.5 * (hi - lo);
-    let mut best = (0, 0, f32::INFINITY);
-    for (lo, hi) in [(lo, hi), (lo - half, hi), (lo, hi + half)] {
-        let endpoints = pack_endpoints(mean + lo * axis, mean + hi * axis);
-        let (indices, error) = assign_colors(endpoints, used);
-        if error < best.2 {
-            best = (endpoints, indices, error);
-        }
-        if let Some((c0, c1)) = refit_endpoints(indices, used) {
-            let refit = pack_endpoints(c0, c1);
-            let (indices, error) = assign_colors(refit, used);
-            if error < best.2 {
-                best = (refit, indices, error);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
-fn pack_endpoints(c0: Vec3, c1: Vec3) -> u32 {
-    encode_rgb565(c0) | encode_rgb565(c1) << HALF_WORD_SHIFT
-}
-
-/// Each used slot's nearest palette entry: the index word and the total squared error.
-fn assign_colors(endpoints: u32, used: &UsedSlots) -> (u32, f32) {
-    let palette = color_palette(endpoints);
-    let mut indices = 0;
-    let mut total = 0.0;
-    for (&slot, &color) in used.slot.iter().zip(&used.color).take(used.count) {
-        let (index, error) = nearest(&palette, color);
-        indices = with_slot_index(indices, slot, index);
-        total += error;
-    }
-    (indices, total)
-}
-
-/// Endpoints minimising the squared error for fixed indices: entry k is w_k·c0 + (1 − w_k)·c1.
-fn refit_endpoints(indices: u32, used: &UsedSlots) -> Option<(Vec3, Vec3)> {
-    const WEIGHT_OF_C0: [f32; 4] = [1.0, 0.0, 2.0 / 3.0, 1.0 / 3.0];
-    let (mut aa, mut ab, mut bb, mut ax, mut bx) = (0.0, 0.0, 0.0, Vec3::ZERO, Vec3::ZERO);
-    for (&slot, &color) in used.slot.iter().zip(&used.color).take(used.count) {
-        let a = WEIGHT_OF_C0[slot_index(indices, slot)];
-        let b = 1.0 - a;
-        (aa, ab, bb) = (aa + a * a, ab + a * b, bb + b * b);
-        (ax, bx) = (ax + a * color, bx + b * color);
-    }
-    let det = aa * bb - ab * ab;
-    // Singular when every slot uses the same weight: the range fit is already as good.
-    (det > 1e-3).then(|| ((bb * ax - ab * bx) / det, (aa * bx - ab * ax) / det))
-}
-
-/// Normal part (words 2–5). The used normals become points `p_i` in a plane (`project_normals`),
-/// where a linear 4×4 grid is fitted to them: from each of a few initial grids
-/// (`initial_grids`), Lloyd passes alternate nearest-candidate picks with a least-squares refit
-/// of `n_b`, `n_u`, `n_v` to the picks. The best grid is quantised, every slot then picks the
-/// best of the 16 quantised candidates against its true normal, and a few more refits to those
-/// picks follow. Errors are sums of squared chord lengths (≈ Σ angle²).
-fn compress_normals(used: &UsedSlots) -> (u32, u32, u32, u32) {
-    if used.count == 0 {
-        return (encode_normal(Vec3::Z), 0, 0, 0);
-    }
-    let points = project_normals(used);
-    let points = &points[..used.count];
-    let mut best_fit: Option<(GridFit, f32)> = None;
-    for init in initial_grids(points) {
-        let (fit, _, error) = lloyd(points, init);
-        if best_fit.is_none_or(|(_, e)| error < e) {
-            best_fit = Some((fit, error));
-        }
-    }
-    let Some(mut best) = best_fit.and_then(|(fit, _)| quantise_grid(fit, used)) else {
-        // Only when the fit degenerated (normals cancelling out): store the first normal alone.
-        return (encode_normal(used.normal[0]), 0, 0, 0);
-    };
-    for _ in 0..QUANTISED_PASSES {
-        let Some(refit) = least_squares_grid(points, &best.picks, &best.fit) else { break };
-        match quantise_grid(refit, used) {
-            Some(grid) if grid.error < best.error => best = grid,
-            _ => break,
-        }
-    }
-    (best.base, best.axes, best.u_indices, best.v_indices)
-}
-
-/// A grid before quantisation, in the plane of the projected points `p_i`.
-#[derive(Clone, Copy, Debug)]
-struct GridFit {
-    centre: Vec3,
-    u: Vec3,
-    v: Vec3,
-}
-
-impl GridFit {
-    fn candidate(&self, pick: u8) -> Vec3 {
-        let (iu, iv) = split_pick(pick);
-        self.centre + GRID_COEFFICIENTS[iu] * self.u + GRID_COEFFICIENTS[iv] * self.v
-    }
-}
-
-/// A candidate pick `iu + 4·iv` as its (c_u, c_v) indices.
-fn split_pick(pick: u8) -> (usize, usize) {
-    (usize::from(pick % 4), usize::from(pick / 4))
-}
-
-/// A quantised grid with every used slot's best candidate.
-#[derive(Clone, Copy, Debug)]
-struct QuantisedGrid {
-    /// The grid it was quantised from.
-    fit: GridFit,
-    base: u32,
-    axes: u32,
-    u_indices: u32,
-    v_indices: u32,
-    /// Each used slot's pick, in used-slot order.
-    picks: [u8; BLOCK_SLOTS],
-    /// Σ |candidate − normal|² over the used slots.
-    error: f32,
-}
-
-/// Alternates nearest-candidate picks and least-squares refits in the plane while the error
-/// drops; returns the fit, its picks and its error.
-fn lloyd(points: &[Vec3], init: GridFit) -> (GridFit, [u8; BLOCK_SLOTS], f32) {
-    let mut fit = init;
-    let (mut picks, mut error) = pick_in_plane(points, &fit);
-    for _ in 0..LLOYD_PASSES {
-        let Some(refit) = least_squares_grid(points, &picks, &fit) else { break };
-        let (refit_picks, refit_error) = pick_in_plane(points, &refit);
-        if refit_error >= error {
-            break;
-        }
-        (fit, picks, error) = (refit, refit_picks, refit_error);
-    }
-    (fit, picks, error)
-}
-
-/// Each point's (nearly) nearest unquantised candidate and the total squared distance. The
-/// point's continuous grid coordinates (α, β) with p ≈ centre + α·u + β·v are rounded to the
-/// nearest coefficients: exact for a rectangular grid, close for a skewed one, and far cheaper
-/// than trying all 16. When u and v are (nearly) parallel, as in the stacked grid, the
-/// coordinates are not unique and all 16 candidates are tried.
-fn pick_in_plane(points: &[Vec3], fit: &GridFit) -> ([u8; BLOCK_SLOTS], f32) {
-    let (uu, uv, vv) = (fit.u.dot(fit.u), fit.u.dot(fit.v), fit.v.dot(fit.v));
-    let det = uu * vv - uv * uv;
-    let mut picks = [0; BLOCK_SLOTS];
-    let mut total = 0.0;
-    if det > 1e-4 * uu * vv {
-        for (pick, &p) in picks.iter_mut().zip(points) {
-            let r = p - fit.centre;
-            let (ur, vr) = (fit.u.dot(r), fit.v.dot(r));
-            let (alpha, beta) = ((vv * ur - uv * vr) / det, (uu * vr - uv * ur) / det);
-            *pick = (nearest_coefficient(alpha) + 4 * nearest_coefficient(beta)) as u8;
-            total += fit.candidate(*pick).distance_squared(p);
-        }
-    } else {
-        let mut candidates = [Vec3::ZERO; BLOCK_SLOTS];
-        for (pick, c) in candidates.iter_mut().enumerate() {
-            *c = fit.candidate(pick as u8);
-        }
-        for (pick, p) in picks.iter_mut().zip(points) {
-            let (i, error) = nearest(&candidates, *p);
-            *pick = i as u8;
-            total += error;
-        }
-    }
-    (picks, total)
-}
-
-/// Index of the [`GRID_COEFFICIENTS`] entry nearest to `x` (they are −1 + 2i/3).
-fn nearest_coefficient(x: f32) -> usize {
-    ((x + 1.0) * 1.5).round().clamp(0.0, 3.0) as usize
-}
-
-/// Candidates are normalised, so scaling the whole grid changes nothing: it is scaled to put
-/// `n_b` on the unit cube, then `n_b`, `n_u` and `n_v` are quantised and each used slot takes the
-/// candidate closest to its true normal. None for a degenerate fit.
-fn quantise_grid(fit: GridFit, used: &UsedSlots) -> Option<QuantisedGrid> {
-    let k = fit.centre.abs().max_element();
-    let finite = fit.centre.is_finite() && fit.u.is_finite() && fit.v.is_finite();
-    if !finite || k <= 1e-6 {
-        return None;
-    }
-    let base = encode_normal(fit.centre / k);
-    let axes = encode_axis_vector(fit.u / k) | encode_axis_vector(fit.v / k) << HALF_WORD_SHIFT;
-    let grid = NormalGrid::from_words(base, axes);
-    let mut candidates = [Vec3::ZERO; BLOCK_SLOTS];
-    for (pick, c) in candidates.iter_mut().enumerate() {
-        let (iu, iv) = split_pick(pick as u8);
-        *c = grid.candidate(iu, iv);
-    }
-    let mut q = QuantisedGrid { fit, base, axes, u_indices: 0, v_indices: 0, picks: [0; BLOCK_SLOTS], error: 0.0 };
-    for (i, (&slot, &normal)) in used.slot.iter().zip(&used.normal).take(used.count).enumerate() {
-        // Squared chord length, not 1 − dot: near-equal unit vectors differ by ~1e-4, whose
-        // squared chord f32 resolves while 1 − dot (≈ 1e-8) drowns in rounding.
-        let (pick, error) = nearest(&candidates, normal);
-        let (iu, iv) = split_pick(pick as u8);
-        q.picks[i] = pick as u8;
-        q.u_indices = with_slot_index(q.u_indices, slot, iu);
-        q.v_indices = with_slot_index(q.v_indices, slot, iv);
-        q.error += error;
-    }
-    Some(q)
-}
-
-/// The points the grid is fitted to. Candidates are normalised, so any positive multiple of a
-/// normal is that normal. When every used normal lies within 60° of their mean m, each is
-/// centrally projected onto the plane tangent to the unit sphere at m (p_i = n_i / (n_i · m)):
-/// a central projection maps great circles to straight lines, and centred on the patch it
-/// distorts least, so a smoothly varying patch stays nearly affine there, which is what a linear
-/// grid fits. Otherwise each normal goes to its own cube face (p = n / max|n_i|), as the
-/// cube encoding of Fig. 7b does.
-fn project_normals(used: &UsedSlots) -> [Vec3; BLOCK_SLOTS] {
-    let normals = &used.normal[..used.count];
-    let mean = normals.iter().sum::<Vec3>().try_normalize().unwrap_or(normals[0]);
-    let tangent = normals.iter().all(|n| n.dot(mean) >= TANGENT_PLANE_MIN_COS);
-    let mut points = [Vec3::ZERO; BLOCK_SLOTS];
-    for (p, n) in points.iter_mut().zip(normals) {
-        *p = if tangent { *n / n.dot(mean) } else { *n / n.abs().max_element() };
-    }
-    points
-}
-
-/// The first grids to try: the rectangle spanned by the extremes of the points along their two
-/// principal axes; both axes stacked along the first principal axis, which spreads 16
-/// candidates evenly over normals varying in one direction; and the parallelogram through four
-/// extreme points, which finds a skewed or near-isotropic lattice that neither box fits (the
-/// principal axes of a near-isotropic cloud are arbitrary).
-fn initial_grids(points: &[Vec3]) -> [GridFit; 3] {
-    let mean = mean(points);
-    let cov = covariance(points, mean);
-    let e1 = principal_axis(cov);
-    // The second axis: the principal axis of what is left once e1 is projected out.
-    let project_out = Mat3::IDENTITY - outer(e1, e1);
-    let e2 = principal_axis(project_out * cov * project_out);
-    let boxed = |a: Vec3, b: Vec3| {
-        let (a_lo, a_hi) = extent(points, mean, a);
-        let (b_lo, b_hi) = extent(points, mean, b);
-        GridFit {
-            centre: mean + 0.5 * (a_lo + a_hi) * a + 0.5 * (b_lo + b_hi) * b,
-            u: 0.5 * (a_hi - a_lo) * a,
-            v: 0.5 * (b_hi - b_lo) * b,
-        }
-    };
-    let principal = boxed(e1, e2);
-    let (share_u, share_v) = STACKED_SHARES;
-    let stacked = GridFit { centre: principal.centre, u: share_u * principal.u, v: share_v * principal.u };
-    [principal, stacked, parallelogram(points, mean)]
-}
-
-/// The parallelogram through four extreme points: A farthest from the mean, C farthest from A,
-/// B and D farthest from the line AC on either side; they become the grid corners
-/// `centre ± u ± v`, which recovers a skewed lattice exactly.
-fn parallelogram(points: &[Vec3], mean: Vec3) -> GridFit {
-    let farthest_from = |from: Vec3| {
-        points.iter().copied().max_by(|p, q| p.distance_squared(from).total_cmp(&q.distance_squared(from)))
-    };
-    let a = farthest_from(mean).unwrap_or(mean);
-    let c = farthest_from(a).unwrap_or(a);
-    let along = (c - a).normalize_or_zero();
-    let off_line = |p: Vec3| (p - a) - (p - a).dot(along) * along;
-    let longest = |x: &Vec3, y: &Vec3| x.length_squared().total_cmp(&y.length_squared());
-    let side = points.iter().map(|&p| off_line(p)).max_by(longest).unwrap_or(Vec3::ZERO).normalize_or_zero();
-    let by_side = |p: &Vec3, q: &Vec3| off_line(*p).dot(side).total_cmp(&off_line(*q).dot(side));
-    let b = points.iter().copied().max_by(by_side).unwrap_or(a);
-    let d = points.iter().copied().min_by(by_side).unwrap_or(a);
-    // With no point on the far side of AC, complete the parallelogram by reflecting B.
-    let d = if off_line(d).dot(side) < 0.0 { d } else { a + c - b };
-    GridFit { centre: 0.25 * (a + b + c + d), u: 0.25 * (c - a + b - d), v: 0.25 * (c - a - b + d) }
-}
-
-/// Least squares for fixed picks: minimise Σ |p_i − (centre + c_u,i·u + c_v,i·v)|² plus a
-/// small pull of u and v towards the previous fit (`REFIT_RIDGE`), which keeps the 3×3 system
-/// regular when the picks leave a direction unconstrained.
-fn least_squares_grid(points: &[Vec3], picks: &[u8; BLOCK_SLOTS], previous: &GridFit) -> Option<GridFit> {
-    let ridge = REFIT_RIDGE * points.len() as f32;
-    let mut normal_matrix = Mat3::from_diagonal(Vec3::new(0.0, ridge, ridge));
-    let mut rhs = [Vec3::ZERO, ridge * previous.u, ridge * previous.v];
-    for (&pick, &p) in picks.iter().zip(points) {
-        let (iu, iv) = split_pick(pick);
-        let (cu, cv) = (GRID_COEFFICIENTS[iu], GRID_COEFFICIENTS[iv]);
-        let row = Vec3::new(1.0, cu, cv);
-        normal_matrix += outer(row, row);
-        rhs = [rhs[0] + p, rhs[1] + cu * p, rhs[2] + cv * p];
-    }
-    if normal_matrix.determinant().abs() < 1e-9 {
-        return None;
-    }
-    // The inverse is symmetric, so its column j is also its row j.
-    let inverse = normal_matrix.inverse();
-    let solve = |row: Vec3| row.x * rhs[0] + row.y * rhs[1] + row.z * rhs[2];
-    Some(GridFit { centre: solve(inverse.x_axis), u: solve(inverse.y_axis), v: solve(inverse.z_axis) })
-}
-
-// ---------------------------------------------------------------------------------------------
 // Small helpers
 // ---------------------------------------------------------------------------------------------
 
@@ -746,14 +399,26 @@ fn field(word: u32, shift: u32, bits: u32) -> u32 {
 }
 
 /// The 2-bit index of `slot` in an index word (words 1, 4, 5). Panics unless `slot` < 16.
-fn slot_index(word: u32, slot: usize) -> usize {
+pub(super) fn slot_index(word: u32, slot: usize) -> usize {
     assert!(slot < BLOCK_SLOTS, "slot {slot} outside a {BLOCK_SLOTS}-slot block");
     field(word, SLOT_INDEX_BITS * slot as u32, SLOT_INDEX_BITS) as usize
 }
 
-fn with_slot_index(word: u32, slot: usize, index: usize) -> u32 {
+pub(super) fn with_slot_index(word: u32, slot: usize, index: usize) -> u32 {
     let shift = SLOT_INDEX_BITS * slot as u32;
     (word & !(((1 << SLOT_INDEX_BITS) - 1) << shift)) | (index as u32) << shift
+}
+
+/// `x` rounded to the nearest integer, ties to even (`super::compress` rounds its lanes alike), for |x| < 2^22 (NaN stays NaN). Two adds
+/// instead of `f32::round`, which without SSE4.1 is a call into libm; exact, since adding
+/// 1.5·2^23 leaves no fraction bits.
+fn round_nearest(x: f32) -> f32 {
+    const SHIFT: f32 = 1.5 * (1u32 << 23) as f32;
+    (x + SHIFT) - SHIFT
+}
+
+fn round_vec(v: Vec3) -> Vec3 {
+    Vec3::new(round_nearest(v.x), round_nearest(v.y), round_nearest(v.z))
 }
 
 /// 2^k for −126 ≤ k ≤ 127, exactly (ldexp on the GPU).
@@ -762,57 +427,9 @@ fn exp2i(k: i32) -> f32 {
 }
 
 /// Clamps to [0, 1]³, NaN to 0.
-fn saturate(c: Vec3) -> Vec3 {
+pub(super) fn saturate(c: Vec3) -> Vec3 {
     let channel = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     Vec3::new(channel(c.x), channel(c.y), channel(c.z))
-}
-
-/// Index and squared distance of the entry of `set` nearest to `x` (first on ties).
-fn nearest(set: &[Vec3], x: Vec3) -> (usize, f32) {
-    let mut best = (0, f32::INFINITY);
-    for (i, c) in set.iter().enumerate() {
-        let d = c.distance_squared(x);
-        if d < best.1 {
-            best = (i, d);
-        }
-    }
-    best
-}
-
-fn mean(points: &[Vec3]) -> Vec3 {
-    points.iter().sum::<Vec3>() / points.len() as f32
-}
-
-fn outer(a: Vec3, b: Vec3) -> Mat3 {
-    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
-}
-
-fn covariance(points: &[Vec3], mean: Vec3) -> Mat3 {
-    points.iter().fold(Mat3::ZERO, |acc, p| acc + outer(*p - mean, *p - mean))
-}
-
-/// Unit eigenvector of the largest eigenvalue of a symmetric positive semi-definite matrix by
-/// power iteration from its longest column; zero for the zero matrix.
-fn principal_axis(m: Mat3) -> Vec3 {
-    let columns = [m.x_axis, m.y_axis, m.z_axis];
-    let start =
-        columns.into_iter().fold(Vec3::ZERO, |a, c| if c.length_squared() > a.length_squared() { c } else { a });
-    let Some(mut v) = start.try_normalize() else { return Vec3::ZERO };
-    for _ in 0..POWER_ITERATIONS {
-        match (m * v).try_normalize() {
-            Some(w) => v = w,
-            None => break,
-        }
-    }
-    v
-}
-
-/// Smallest and largest (p − origin) · axis over the points.
-fn extent(points: &[Vec3], origin: Vec3, axis: Vec3) -> (f32, f32) {
-    points
-        .iter()
-        .map(|p| (*p - origin).dot(axis))
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)))
 }
 
 #[cfg(test)]

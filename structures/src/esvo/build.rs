@@ -24,10 +24,12 @@ pub fn build(scene: &Scene, params: EsvoParams) -> Esvo {
     let t0 = Instant::now();
     let contours = if params.contours { fit_contours(scene, &tree, params.contour_max_ratio) } else { Vec::new() };
     let contour_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let t1 = Instant::now();
     let mut esvo = Emitter::new(&tree, &contours, params.attributes).emit();
     esvo.params = params;
     esvo.voxelize = voxelize;
     esvo.stats.contour_ms = contour_ms;
+    esvo.stats.layout_ms = t1.elapsed().as_secs_f64() * 1e3 - esvo.stats.attributes_ms;
     esvo
 }
 
@@ -161,7 +163,7 @@ impl ContourFitter<'_> {
     /// children see. No contour where its ancestors' slab already pins the surface to a
     /// fraction of the voxel ("store one only where it tightens the bound meaningfully").
     fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, buffers: &mut FitBuffers) -> (u32, f32) {
-        let side = (-(level as f32)).exp2();
+        let side = voxel_side(level);
         if level == 0 || v.inherited <= INHERITED_ENOUGH * side {
             return (0, v.inherited);
         }
@@ -189,7 +191,7 @@ impl ContourFitter<'_> {
         let node = &self.tree.levels[level];
         let mask = node.masks[v.index] as u32;
         let mut child = node.first_child[v.index] as usize;
-        let side = (-((level + 1) as f32)).exp2();
+        let side = voxel_side(level + 1);
         let c = v.coords;
         for slot in 0..8u32 {
             if mask >> slot & 1 == 0 {
@@ -221,6 +223,11 @@ impl ContourFitter<'_> {
         });
         fill.lists[level] = list;
     }
+}
+
+/// The side of a voxel at `level` in octree units, 2^−level (exact; `exp2` is a libm call).
+fn voxel_side(level: usize) -> f32 {
+    1.0 / (1u64 << level) as f32
 }
 
 /// A voxel gets no contour if its ancestors' nearest contour is already at most this fraction of
@@ -278,14 +285,18 @@ impl<'a> Emitter<'a> {
                 })
                 .collect();
         }
+        // Room for every predicted slot plus the page headers and padding (≤ 12 % at L = 11),
+        // so that the arrays do not grow (and copy) millions of slots at a time.
+        let predicted = sub.first().and_then(|s| s.first()).map_or(0, |&n| n as usize + 1);
+        let capacity = predicted + predicted / 8 + PAGE_SLOTS;
         Self {
             tree,
             contours,
             attributes,
             sub,
-            slots: Vec::new(),
-            kinds: Vec::new(),
-            contour_data: Vec::new(),
+            slots: Vec::with_capacity(capacity),
+            kinds: Vec::with_capacity(capacity),
+            contour_data: Vec::with_capacity(contours.iter().map(|c| c.iter().filter(|&&w| w != 0).count()).sum()),
             lookups: Vec::new(),
             values: Vec::new(),
             stats: EsvoStats::default(),
@@ -438,7 +449,9 @@ impl<'a> Emitter<'a> {
                 (self.values.len() as u64 * 2, self.values.len() as u64 * 2, self.lookups.len() as u64 * 4)
             }
             Attributes::Compressed => {
+                let t0 = Instant::now();
                 let blocks = self.compressed_blocks();
+                self.stats.attributes_ms = t0.elapsed().as_secs_f64() * 1e3;
                 for b in &blocks {
                     words.extend(b.0);
                 }

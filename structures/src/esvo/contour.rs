@@ -227,6 +227,10 @@ pub fn fit_with(
     }
 
     let mean = mean_normal(areas);
+    // Along an axis, the extremes of d over the points are those of the points' bounding box.
+    let (box_lo, box_hi) =
+        points.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let corners = [box_lo, box_hi];
     let candidates =
         [mean, DVec3::X, DVec3::Y, DVec3::Z].into_iter().chain(params.extra_directions.iter().map(|d| d.as_dvec3()));
     let mut best: Option<Fitted> = None;
@@ -234,7 +238,8 @@ pub fn fit_with(
         let Some(n) = quantise(direction) else {
             continue;
         };
-        let Some(fitted) = fit_along(points, &cube, n) else {
+        let axis_aligned = n.iter().filter(|&&c| c != 0).count() == 1;
+        let Some(fitted) = fit_along(if axis_aligned { &corners } else { points }, &cube, n) else {
             continue;
         };
         if best.is_none_or(|b| fitted.ratio < b.ratio) {
@@ -260,7 +265,7 @@ fn quantise(direction: DVec3) -> Option<[i32; 3]> {
         return None;
     }
     let scaled = direction * (NORMAL_MAX as f64 / largest);
-    Some(scaled.to_array().map(|c| (c.round() as i32).clamp(-NORMAL_MAX, NORMAL_MAX)))
+    Some(scaled.to_array().map(|c| (round_nearest(c) as i32).clamp(-NORMAL_MAX, NORMAL_MAX)))
 }
 
 /// The tightest slab with integer normal `n` around `points`, or `None` if it needs T > 127.
@@ -269,23 +274,38 @@ fn fit_along(points: &[DVec3], cube: &Cube, n: [i32; 3]) -> Option<Fitted> {
     let extent = nd.abs().element_sum();
     let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for &x in points {
-        let d = nd.dot((x - cube.centre) / cube.side);
+        let d = nd.dot(x - cube.centre);
         dmin = dmin.min(d);
         dmax = dmax.max(d);
     }
+    // In units of the side; the division's rounding (~1e-16) is far inside the margin.
+    let (dmin, dmax) = (dmin / cube.side, dmax / cube.side);
     let eps = extent * (MARGIN_REL + F32_EVAL_EPS * f32::EPSILON as f64 * cube.frame_scale);
     let (dmin, dmax) = (dmin - eps, dmax + eps);
 
     // The nearest grid position to the middle needs the smallest T (clamping only widens).
     let (cpos, chalf) = (CPOS as f64, CHALF as f64);
-    let p = ((dmin + dmax) / 2.0 / cpos).round().clamp(POSITION_MIN as f64, POSITION_MAX as f64);
+    let p = round_nearest((dmin + dmax) / 2.0 / cpos).clamp(POSITION_MIN as f64, POSITION_MAX as f64);
     let half = (p * cpos - dmin).max(dmax - p * cpos).max(0.0);
-    let t = (half / chalf).ceil();
+    let t = ceil(half / chalf);
     if t > THICKNESS_MAX as f64 {
         return None;
     }
     let (p, t) = (p as i32, t as u32);
     Some(Fitted { contour: Contour::encode(n, p, t), ratio: (t as f64 * 2.0 * chalf / extent) as f32 })
+}
+
+/// `x` rounded to the nearest integer (ties to even) for |x| < 2^51: two adds, where
+/// `f64::round` is a call into libm on x86-64 without SSE4.1. NaN stays NaN.
+fn round_nearest(x: f64) -> f64 {
+    const SHIFT: f64 = 1.5 * (1u64 << 52) as f64;
+    (x + SHIFT) - SHIFT
+}
+
+/// The smallest integer ≥ `x`, exactly, for |x| < 2^51 (as [`round_nearest`]).
+fn ceil(x: f64) -> f64 {
+    let r = round_nearest(x);
+    if r < x { r + 1.0 } else { r }
 }
 
 /// Clipping a triangle by Sutherland–Hodgman against the 6 planes of a closed cube leaves at

@@ -6,11 +6,13 @@
 //! | [`build`] | octree → layout: contours, depth-first emission, attachments |
 //! | [`contour`] | 32-bit contours: fitting, encoding, the slab a kernel intersects |
 //! | [`attributes`] | raw and compressed colour/normal encodings |
+//! | [`compress`] | fitting a compressed block's colour endpoints and normal grid |
 //!
 //! CPU ray caster (Fig. 15, beam optimisation §6.2): `kernels::cpu::esvo`.
 
 pub mod attributes;
 pub mod build;
+pub mod compress;
 pub mod contour;
 pub mod layout;
 
@@ -114,7 +116,11 @@ pub struct EsvoStats {
     pub colour_bytes: u64,
     pub normal_bytes: u64,
     pub lookup_bytes: u64,
+    /// Build phases after voxelising, wall-clock: contour fitting, laying out the descriptors
+    /// (with the raw attachment's values), and the compressed attachment's blocks.
     pub contour_ms: f64,
+    pub layout_ms: f64,
+    pub attributes_ms: f64,
 }
 
 /// A built ESVO: the words a kernel reads, plus where the sections start.
