@@ -57,8 +57,9 @@ pub struct VoxelizeStats {
     pub subcube_level: u32,
     /// Wall time, in milliseconds, including the consumer's time.
     pub ms: f64,
-    /// Most bytes held at once by one window's (code, triangle) pairs and chunks (the bin array,
-    /// 4 bytes per sub-cube plus 4 per triangle reference, is not counted).
+    /// Most bytes held at once by the (code, triangle) pairs and chunks of two windows, the one
+    /// being consumed and the one being voxelised (the bin array, 4 bytes per sub-cube plus 4
+    /// per triangle reference, is not counted).
     pub peak_chunk_bytes: u64,
 }
 
@@ -87,10 +88,10 @@ pub fn triangle_overlaps_box(tri: &[Vec3; 3], center: Vec3, half: Vec3) -> bool 
 ///
 /// # Panics
 /// If `grid.level > MAX_VOXELIZE_LEVEL`, or if the scene makes over 2^32 sub-cube references.
-pub fn voxelize<E>(
+pub fn voxelize<E: Send>(
     scene: &Scene,
     grid: &VoxelGrid,
-    mut on_chunk: impl FnMut(VoxelChunk) -> Result<(), E>,
+    mut on_chunk: impl FnMut(VoxelChunk) -> Result<(), E> + Send,
 ) -> Result<VoxelizeStats, E> {
     assert!(grid.level <= MAX_VOXELIZE_LEVEL, "voxelize: level {} is over {MAX_VOXELIZE_LEVEL}", grid.level);
     let start = Instant::now();
@@ -100,17 +101,19 @@ pub fn voxelize<E>(
     let nonempty = bins.nonempty();
     stats.subcubes = nonempty.len() as u64;
     let window = WINDOW_PER_THREAD * rayon::current_num_threads().max(1);
-    for group in nonempty.chunks(window) {
+    let process = |group: &[u32]| -> Vec<SubcubeOutput> {
         // Largest first, so that no thread is left with a big sub-cube at the window's end.
         let mut order: Vec<usize> = (0..group.len()).collect();
         order.sort_by_key(|&i| std::cmp::Reverse(bins.list(group[i]).len()));
         let mut outs: Vec<(usize, SubcubeOutput)> =
             order.par_iter().with_max_len(1).map(|&i| (i, v.process_subcube(group[i], bins.list(group[i])))).collect();
         outs.sort_unstable_by_key(|&(i, _)| i);
-        let outs = outs.into_iter().map(|(_, out)| out);
-        let outs: Vec<SubcubeOutput> = outs.collect();
-        let held: u64 = outs.iter().map(|o| o.pair_bytes + chunk_bytes(&o.chunk)).sum();
-        stats.peak_chunk_bytes = stats.peak_chunk_bytes.max(held);
+        outs.into_iter().map(|(_, out)| out).collect()
+    };
+    let held = |outs: &[SubcubeOutput]| -> u64 { outs.iter().map(|o| o.pair_bytes + chunk_bytes(&o.chunk)).sum() };
+    // The consumer takes one window's chunks while the next window is voxelised (`join`), so its
+    // sequential work overlaps the parallel work instead of idling every other thread.
+    let mut consume = |outs: Vec<SubcubeOutput>, stats: &mut VoxelizeStats| -> Result<(), E> {
         for out in outs {
             stats.triangle_voxel_tests += out.tests;
             if !out.chunk.codes.is_empty() {
@@ -118,7 +121,17 @@ pub fn voxelize<E>(
                 on_chunk(out.chunk)?;
             }
         }
+        Ok(())
+    };
+    let mut pending: Vec<SubcubeOutput> = Vec::new();
+    for group in nonempty.chunks(window) {
+        let pending_bytes = held(&pending);
+        let (consumed, outs) = rayon::join(|| consume(std::mem::take(&mut pending), &mut stats), || process(group));
+        consumed?;
+        stats.peak_chunk_bytes = stats.peak_chunk_bytes.max(pending_bytes + held(&outs));
+        pending = outs;
     }
+    consume(pending, &mut stats)?;
     stats.ms = start.elapsed().as_secs_f64() * 1e3;
     Ok(stats)
 }
