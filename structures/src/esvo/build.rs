@@ -22,7 +22,7 @@ const FAR_THRESHOLD: u64 = CHILD_PTR_MAX as u64 - 600;
 pub fn build(scene: &Scene, params: EsvoParams) -> Esvo {
     let (tree, voxelize) = voxel::build_octree(scene, params.level);
     let t0 = Instant::now();
-    let contours = if params.contours { fit_contours(scene, &tree, params.contour_max_ratio) } else { Vec::new() };
+    let contours = if params.contours { fit_contours(scene, &tree, &params) } else { Vec::new() };
     let contour_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
     let mut esvo = Emitter::new(&tree, &contours, params.attributes).emit();
@@ -41,7 +41,7 @@ pub fn build(scene: &Scene, params: EsvoParams) -> Esvo {
 /// over a level's voxels; below, one rayon task per voxel of that level descends depth-first: in
 /// Morton order a voxel's descendants are contiguous at every level, so each task fills its own
 /// ranges and the ranges concatenate in task order.
-fn fit_contours(scene: &Scene, tree: &Octree, max_ratio: f32) -> Vec<Vec<u32>> {
+fn fit_contours(scene: &Scene, tree: &Octree, esvo: &EsvoParams) -> Vec<Vec<u32>> {
     let grid = tree.grid;
     let levels = grid.level as usize;
     if tree.is_empty() {
@@ -51,8 +51,14 @@ fn fit_contours(scene: &Scene, tree: &Octree, max_ratio: f32) -> Vec<Vec<u32>> {
     let triangles: Vec<[Vec3; 3]> = scene.triangles().par_iter().map(|t| t.map(to_octree)).collect();
     let bounds: Vec<[Vec3; 2]> =
         triangles.par_iter().map(|p| [p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])]).collect();
-    let params = FitParams { max_ratio, ..FitParams::default() };
-    let fitter = ContourFitter { tree, triangles: &triangles, bounds: &bounds, params };
+    let params = FitParams { max_ratio: esvo.contour_max_ratio, ..FitParams::default() };
+    let fitter = ContourFitter {
+        tree,
+        triangles: &triangles,
+        bounds: &bounds,
+        params,
+        inherited_enough: esvo.contour_inherited,
+    };
 
     let split = levels.min(SPLIT_LEVEL);
     let mut contours: Vec<Vec<u32>> = vec![Vec::new(); levels + 1];
@@ -103,6 +109,8 @@ struct ContourFitter<'a> {
     triangles: &'a [[Vec3; 3]],
     bounds: &'a [[Vec3; 2]],
     params: FitParams,
+    /// [`EsvoParams::contour_inherited`].
+    inherited_enough: f32,
 }
 
 /// A voxel to fit: its index and integer coordinates at its level, its candidate triangles, and
@@ -164,7 +172,7 @@ impl ContourFitter<'_> {
     /// fraction of the voxel ("store one only where it tightens the bound meaningfully").
     fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, buffers: &mut FitBuffers) -> (u32, f32) {
         let side = voxel_side(level);
-        if level == 0 || v.inherited <= INHERITED_ENOUGH * side {
+        if level == 0 || v.inherited <= self.inherited_enough * side {
             return (0, v.inherited);
         }
         let c = v.coords;
@@ -192,6 +200,8 @@ impl ContourFitter<'_> {
         let mask = node.masks[v.index] as u32;
         let mut child = node.first_child[v.index] as usize;
         let side = voxel_side(level + 1);
+        // Leaves that will not be fitted (`fit_voxel` makes the same test) need no candidates.
+        let skip = level + 2 == self.tree.levels.len() && inherited <= self.inherited_enough * side;
         let c = v.coords;
         for slot in 0..8u32 {
             if mask >> slot & 1 == 0 {
@@ -201,10 +211,12 @@ impl ContourFitter<'_> {
             let cmin = Vec3::ONE + Vec3::new(coords[0] as f32, coords[1] as f32, coords[2] as f32) * side;
             let cmax = cmin + Vec3::splat(side);
             list.clear();
-            list.extend(v.triangles.as_ref().iter().copied().filter(|&t| {
-                let [lo, hi] = self.bounds[t as usize];
-                cmin.cmple(hi).all() && cmax.cmpge(lo).all()
-            }));
+            if !skip {
+                list.extend(v.triangles.as_ref().iter().copied().filter(|&t| {
+                    let [lo, hi] = self.bounds[t as usize];
+                    cmin.cmple(hi).all() && cmax.cmpge(lo).all()
+                }));
+            }
             f(Voxel { index: child, coords, triangles: (), inherited }, list);
             child += 1;
         }
@@ -229,10 +241,6 @@ impl ContourFitter<'_> {
 fn voxel_side(level: usize) -> f32 {
     1.0 / (1u64 << level) as f32
 }
-
-/// A voxel gets no contour if its ancestors' nearest contour is already at most this fraction of
-/// the voxel's side thick (octree units).
-const INHERITED_ENOUGH: f32 = 0.25;
 
 /// Thickness in octree units of a contour of a voxel of side `side`: `0.75·T / |n|` voxel sides.
 fn slab_thickness(c: super::contour::Contour, side: f32) -> f32 {

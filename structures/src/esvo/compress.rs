@@ -28,7 +28,7 @@ const STACKED_SHARES: (f32, f32) = (0.8, 0.2);
 /// Lloyd passes (assign, then least-squares refit) per initial grid, before quantisation.
 const LLOYD_PASSES: usize = 4;
 /// Lloyd passes after quantisation, against the true normals.
-const QUANTISED_PASSES: usize = 2;
+const QUANTISED_PASSES: usize = 1;
 /// Pull of a refit towards the previous axis vectors, so a direction the picks do not
 /// constrain (all slots on one grid row) stays put instead of making the system singular.
 const REFIT_RIDGE: f32 = 1e-3;

@@ -40,6 +40,9 @@ pub struct EsvoParams {
     pub contours: bool,
     /// A contour is stored only if its slab keeps at most this fraction of the cube.
     pub contour_max_ratio: f32,
+    /// A voxel is not fitted (gets no contour) when its ancestors' nearest contour is already at
+    /// most this many of its sides thick: its own could not tighten the bound meaningfully.
+    pub contour_inherited: f32,
     pub attributes: Attributes,
     /// Beam optimisation for primary rays (§6.2).
     pub beam: bool,
@@ -55,6 +58,7 @@ impl Default for EsvoParams {
             level: 10,
             contours: true,
             contour_max_ratio: 0.5,
+            contour_inherited: 0.375,
             attributes: Attributes::Compressed,
             beam: false,
             beam_block: 8,
@@ -92,6 +96,7 @@ impl EsvoParams {
             level: voxel::level_param(params)?,
             contours: on_off(params, "esvo.contours", d.contours)?,
             contour_max_ratio: params.get("esvo.contour_max_ratio", d.contour_max_ratio)?,
+            contour_inherited: params.get("esvo.contour_inherited", d.contour_inherited)?,
             attributes,
             beam: on_off(params, "esvo.beam", d.beam)?,
             beam_block,
