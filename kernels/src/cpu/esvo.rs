@@ -92,7 +92,10 @@ fn cast_ray<S: Stats>(
     let r = OctreeRay::from_octree_space(&oray);
     let options = CastOptions { contours: contours && esvo.params.contours, lod_k: lod_k / esvo.grid.size };
     let nodes = Descriptors { words: &esvo.words, root: esvo.root_slot, contour_base: esvo.contour_word as usize };
-    cast(&nodes, &oray, &r, t_min, t_max, options, Some(contour_span), stats)
+    // Only the box the leaves occupy can hold a hit: the caster starts at its entry and gives up
+    // past its exit (the same as a ray's own t_min, t_max; hits and t are unchanged).
+    let (enter, exit) = r.box_span(esvo.occupied[0], esvo.occupied[1]);
+    cast(&nodes, &oray, &r, t_min.max(enter), t_max.min(exit), options, Some(contour_span), stats)
 }
 
 /// The normal of child `slot` of the descriptor at `desc_slot`, found as Fig. 8 does: the page

@@ -88,6 +88,9 @@ pub fn cast<L: CastNodes, S: Stats>(
     if t_min > t_max {
         return None;
     }
+    // Every span the stack restores ends by the ray's own end, so once ADVANCE passes it no
+    // voxel can be hit.
+    let t_end = t_max;
     let mut stack = [(L::Node::default(), 0.0f32); S_MAX as usize + 1];
     let mut h = t_max;
     let mut parent = nodes.root();
@@ -171,6 +174,9 @@ pub fn cast<L: CastNodes, S: Stats>(
         let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
+        if t_min > t_end {
+            return None;
+        }
 
         // POP if a flipped bit went against the ray: the ray left the parent.
         if idx & step_mask != 0 {

@@ -67,6 +67,21 @@ impl OctreeRay {
         p * self.coef - self.bias
     }
 
+    /// The span `(entry, exit)` of the world-oriented octree-space box `[lo, hi]` (inside
+    /// `[1, 2]³`), through the same [`Self::plane_t`] as every cube, so that a cube inside the box
+    /// is never entered before the box's entry nor left after its exit.
+    #[inline]
+    pub fn box_span(&self, lo: Vec3, hi: Vec3) -> (f32, f32) {
+        let (mut enter, mut exit) = (hi, lo);
+        for a in 0..3 {
+            if self.mirror_mask >> a & 1 == 1 {
+                // Mirrored x ↦ 3 − x (exact on [1, 2]) swaps the faces.
+                (enter[a], exit[a]) = (3.0 - lo[a], 3.0 - hi[a]);
+            }
+        }
+        (self.plane_t(enter).max_element(), self.plane_t(exit).min_element())
+    }
+
     /// The span `(entry, exit)` of the root cube `[1, 2]³`, clipped to `(t_min, t_max)`; empty if
     /// `entry > exit`.
     #[inline(always)]

@@ -19,6 +19,8 @@ const ESVO_BEAM_LOD: u32 = 9u;
 // beam_k (world, f32 bits) and the voxel size (world, f32 bits): the start margin.
 const ESVO_BEAM_K: u32 = 10u;
 const ESVO_VOXEL: u32 = 11u;
+// The box the leaves occupy (Esvo::occupied), octree space, f32 bits: lo xyz, then hi xyz.
+const ESVO_OCCUPIED: u32 = 12u;
 
 fn node_root() -> u32 {
     return params(ESVO_ROOT);
@@ -60,9 +62,15 @@ fn node_contour(node: u32, desc: vec2<u32>, slot: u32) -> ContourRef {
     return ContourRef(true, words(params(ESVO_CONTOUR_BASE) + (desc.y >> 8u) + rank(mask, slot)));
 }
 
+fn occupied_corner(first: u32) -> vec3<f32> {
+    return vec3<f32>(bitcast<f32>(params(first)), bitcast<f32>(params(first + 1u)), bitcast<f32>(params(first + 2u)));
+}
+
+// Casts from the entry to the exit of the box the leaves occupy (kernels/src/cpu/esvo.rs).
 fn esvo_cast(ray: Ray, t_min: f32, contours: bool, lod_k: f32) -> CastHit {
     let r = to_octree_space(ray);
-    return octree_cast(r.o, r.d, t_min, ray.t_max, contours, lod_k);
+    let span = box_span(octree_ray(r.o, r.d), occupied_corner(ESVO_OCCUPIED), occupied_corner(ESVO_OCCUPIED + 3u));
+    return octree_cast(r.o, r.d, max(t_min, span.x), min(ray.t_max, span.y), contours, lod_k);
 }
 
 // Beam pre-pass: one invocation per corner of the beam_block × beam_block pixel blocks, casting

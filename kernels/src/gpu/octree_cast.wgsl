@@ -70,6 +70,8 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
     if (t_min > t_max) {
         return miss;
     }
+    // Every span the stack restores ends by the ray's own end: past it nothing can be hit.
+    let t_end = t_max;
     // (parent, t_max) per scale; scale S_MAX − 1 is the root's children.
     var stack_node: array<u32, 24>;
     var stack_t: array<f32, 24>;
@@ -150,6 +152,9 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
         let step_mask = advance_cube(&pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
+        if (t_min > t_end) {
+            return miss;
+        }
 
         // POP if a flipped bit went against the ray: the ray left the parent. The new scale is
         // the highest bit that differs between the float bits of the old and new positions.

@@ -45,6 +45,22 @@ fn plane_t(r: OctreeRay, p: vec3<f32>) -> vec3<f32> {
     return p * r.coef - r.bias;
 }
 
+// The span (entry, exit) of the world-oriented octree-space box [lo, hi] inside [1, 2]³, through
+// plane_t like every cube (OctreeRay::box_span).
+fn box_span(r: OctreeRay, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
+    var enter = hi;
+    var exit = lo;
+    for (var a = 0u; a < 3u; a++) {
+        if (((r.mirror >> a) & 1u) == 1u) {
+            enter[a] = 3.0 - lo[a];
+            exit[a] = 3.0 - hi[a];
+        }
+    }
+    let te = plane_t(r, enter);
+    let tx = plane_t(r, exit);
+    return vec2<f32>(max(max(te.x, te.y), te.z), min(min(tx.x, tx.y), tx.z));
+}
+
 // The span (entry, exit) of the root cube clipped to (t_min, t_max); empty if entry > exit.
 fn root_span(r: OctreeRay, t_min: f32, t_max: f32) -> vec2<f32> {
     let enter = plane_t(r, vec3<f32>(2.0));

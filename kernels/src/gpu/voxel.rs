@@ -73,6 +73,7 @@ pub fn esvo<'a>(esvo: &'a Esvo, camera: &Camera) -> GpuProgram<'a> {
         beam_k.to_bits(),
         esvo.grid.voxel_size().to_bits(),
     ]);
+    p.extend(esvo.occupied.iter().flat_map(|c| c.to_array().map(f32::to_bits)));
     let corners = (camera.width.div_ceil(b) + 1) * (camera.height.div_ceil(b) + 1);
     GpuProgram {
         label: "esvo",

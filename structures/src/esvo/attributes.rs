@@ -34,8 +34,8 @@
 //! | compressed, affine patch, spread < 5° | 0.047 | 0.34 | 7.4 |
 //! | compressed, sphere of radius 40 voxels (spread < 5°) | 0.16 | 0.79 | 6.2 |
 //! | compressed, sphere of radius 400 voxels | 0.016 | 0.083 | 9.4 |
-//! | compressed, sphere of radius 4000 voxels | 0.0022 | 0.0087 | 12.7 |
-//! | compressed, one-direction arc ≤ 10° | 0.078 | 0.54 | 6.7 |
+//! | compressed, sphere of radius 4000 voxels | 0.0022 | 0.0076 | 12.9 |
+//! | compressed, one-direction arc ≤ 10° | 0.079 | 0.54 | 6.7 |
 //! | compressed, 16 random within 1° of an axis | 0.12 | 0.45 | 7.0 |
 //! | compressed, 16 random unit normals | 20 | 90 | — |
 //!
@@ -44,7 +44,7 @@
 //! to ~1/8 of their length, and a voxel staircase is no exact 4×4 grid. Colours: RGB565 rounding
 //! of the endpoints (half-step 0.016) on the palette line, measured max 0.017 per channel; 16
 //! random colours, mean 0.27, max 0.69 per channel. The fit itself is [`super::compress`];
-//! `compress_block` takes ~1.6 µs per block on the 2-core dev machine.
+//! `compress_block` takes ~1.5 µs per block on the 2-core dev machine.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

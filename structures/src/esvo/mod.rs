@@ -16,6 +16,7 @@ pub mod compress;
 pub mod contour;
 pub mod layout;
 
+use glam::Vec3;
 use serde::Serialize;
 use serde_json::json;
 
@@ -141,6 +142,10 @@ pub struct Esvo {
     pub contour_word: u32,
     pub attach_word: u32,
     pub attributes: Attributes,
+    /// The box every leaf voxel lies in, in octree space (`[1, 2]³`, world-oriented), on the
+    /// grid of the leaves' parents: the caster clips each ray to it before descending, so rays
+    /// through the root cube's empty margin cost nothing (exact: no voxel lies outside it).
+    pub occupied: [Vec3; 2],
     pub stats: EsvoStats,
     pub params: EsvoParams,
     pub voxelize: VoxelizeStats,
