@@ -2,6 +2,8 @@
 //! ([`super::octree_cast`]) over child descriptors — relative child pointers, far pointers,
 //! cooperating contours intersected into the active span — plus the attribute lookup of Fig. 8
 //! (page header → info section → attachment) and the beam optimisation of §6.2 for primary rays.
+//! Each ray is first clipped to the box the leaves occupy (`Esvo::occupied`), which leaves hits
+//! and `t` exactly as they are and spares rays the root cube's empty margin.
 //! WGSL twin: `kernels/src/gpu/esvo.wgsl` (beam pre-pass `esvo_beam`).
 
 use glam::Vec3;
