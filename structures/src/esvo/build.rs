@@ -71,7 +71,7 @@ fn fit_contours(scene: &Scene, tree: &Octree, esvo: &EsvoParams) -> Vec<Vec<u32>
             .map(|v| {
                 let (word, inherited) = fitter.fit_voxel(level, v, &mut FitBuffers::default());
                 let mut children = Vec::new();
-                fitter.for_each_child(level, v, inherited, &mut Vec::new(), |child, list| {
+                fitter.for_each_child(level, v, inherited, &mut ChildLists::default(), |child, list| {
                     children.push(child.with(list.to_vec()))
                 });
                 (word, children)
@@ -128,13 +128,16 @@ impl Voxel<()> {
     }
 }
 
+/// The candidate triangles of a voxel's eight children, by child slot.
+type ChildLists = [Vec<u32>; 8];
+
 /// Contour words of one subtree: per level, a range of voxels, with scratch buffers per level.
 struct Fill {
     /// Per level: the index of the first voxel `words` holds.
     first: Vec<usize>,
     words: Vec<Vec<u32>>,
-    /// Per level: a child's candidate triangles, reused.
-    lists: Vec<Vec<u32>>,
+    /// Per level: the children's candidate triangles, reused.
+    lists: Vec<ChildLists>,
     scratch: FitBuffers,
 }
 
@@ -162,7 +165,7 @@ impl Fill {
                     ..node.first_child[last] as usize + node.masks[last].count_ones() as usize;
             }
         }
-        Fill { first, words, lists: vec![Vec::new(); levels], scratch: FitBuffers::default() }
+        Fill { first, words, lists: vec![ChildLists::default(); levels], scratch: FitBuffers::default() }
     }
 }
 
@@ -187,37 +190,53 @@ impl ContourFitter<'_> {
     }
 
     /// Calls `f` for each child of interior voxel `v` at `level` with its candidate triangles
-    /// (those of `v` whose boxes meet the child's cube), built in `list`.
+    /// (those of `v` whose boxes meet the child's cube), built in `lists` in one pass over `v`'s
+    /// triangles: per axis, a box meets the lower children, the upper ones or both.
     fn for_each_child<T: AsRef<[u32]>>(
         &self,
         level: usize,
         v: &Voxel<T>,
         inherited: f32,
-        list: &mut Vec<u32>,
+        lists: &mut ChildLists,
         mut f: impl FnMut(Voxel<()>, &[u32]),
     ) {
+        /// Child slots in the upper half of axis x, y, z (bit `a` of the slot set).
+        const UPPER: [u8; 3] = [0b1010_1010, 0b1100_1100, 0b1111_0000];
         let node = &self.tree.levels[level];
-        let mask = node.masks[v.index] as u32;
-        let mut child = node.first_child[v.index] as usize;
+        let mask = node.masks[v.index];
         let side = voxel_side(level + 1);
+        let c = v.coords;
+        let parent_lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * (2.0 * side);
+        let (centre, parent_hi) = (parent_lo + Vec3::splat(side), parent_lo + Vec3::splat(2.0 * side));
+        for list in lists.iter_mut() {
+            list.clear();
+        }
         // Leaves that will not be fitted (`fit_voxel` makes the same test) need no candidates.
         let skip = level + 2 == self.tree.levels.len() && inherited <= self.inherited_enough * side;
-        let c = v.coords;
+        if !skip {
+            for &t in v.triangles.as_ref() {
+                let [lo, hi] = self.bounds[t as usize];
+                // Exactly the test `cube_lo ≤ hi && cube_hi ≥ lo` of each child's cube.
+                let lower = (lo.cmple(centre) & hi.cmpge(parent_lo)).bitmask();
+                let upper = (hi.cmpge(centre) & lo.cmple(parent_hi)).bitmask();
+                let mut children = mask;
+                for (a, &up) in UPPER.iter().enumerate() {
+                    let half = |bits: u32, slots: u8| if bits >> a & 1 == 1 { slots } else { 0 };
+                    children &= half(lower, !up) | half(upper, up);
+                }
+                while children != 0 {
+                    lists[children.trailing_zeros() as usize].push(t);
+                    children &= children - 1;
+                }
+            }
+        }
+        let mut child = node.first_child[v.index] as usize;
         for slot in 0..8u32 {
             if mask >> slot & 1 == 0 {
                 continue;
             }
             let coords = [c[0] * 2 + (slot & 1), c[1] * 2 + (slot >> 1 & 1), c[2] * 2 + (slot >> 2 & 1)];
-            let cmin = Vec3::ONE + Vec3::new(coords[0] as f32, coords[1] as f32, coords[2] as f32) * side;
-            let cmax = cmin + Vec3::splat(side);
-            list.clear();
-            if !skip {
-                list.extend(v.triangles.as_ref().iter().copied().filter(|&t| {
-                    let [lo, hi] = self.bounds[t as usize];
-                    cmin.cmple(hi).all() && cmax.cmpge(lo).all()
-                }));
-            }
-            f(Voxel { index: child, coords, triangles: (), inherited }, list);
+            f(Voxel { index: child, coords, triangles: (), inherited }, &lists[slot as usize]);
             child += 1;
         }
     }
@@ -229,11 +248,11 @@ impl ContourFitter<'_> {
         if level + 1 == self.tree.levels.len() {
             return;
         }
-        let mut list = std::mem::take(&mut fill.lists[level]);
-        self.for_each_child(level, v, inherited, &mut list, |child, triangles| {
+        let mut lists = std::mem::take(&mut fill.lists[level]);
+        self.for_each_child(level, v, inherited, &mut lists, |child, triangles| {
             self.visit(level + 1, &child.with(triangles), fill)
         });
-        fill.lists[level] = list;
+        fill.lists[level] = lists;
     }
 }
 

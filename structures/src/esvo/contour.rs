@@ -419,8 +419,8 @@ fn clip_plane(polygon: &Polygon, out: &mut Polygon, axis: usize, plane: f64, ins
     out.len = 0;
     out.overflowed = polygon.overflowed;
     let vs = polygon.vertices();
-    for (i, &a) in vs.iter().enumerate() {
-        let b = vs[(i + 1) % vs.len()];
+    // Edges (a, b) in order, the last closing back to the first (no modulo per vertex).
+    for (&a, &b) in vs.iter().zip(vs.iter().skip(1).chain(vs.first())) {
         let (a_in, b_in) = (inside(a[axis]), inside(b[axis]));
         if a_in {
             out.push(a);
