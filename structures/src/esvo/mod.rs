@@ -59,7 +59,7 @@ impl Default for EsvoParams {
             level: 10,
             contours: true,
             contour_max_ratio: 0.5,
-            contour_inherited: 0.375,
+            contour_inherited: 0.25,
             attributes: Attributes::Compressed,
             beam: false,
             beam_block: 8,
