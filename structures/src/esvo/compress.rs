@@ -41,7 +41,7 @@ const GOOD_ENOUGH_FRACTION: f32 = 1.0 / 16.0;
 
 /// Compresses the colours (linear RGB in [0, 1]) and unit normals of 16 child slots (§5.5).
 /// `None` slots are empty: they are left out of the fit and decode to whatever the block gives
-/// them. Deterministic; allocation-free; about a microsecond per block.
+/// them. Deterministic; allocation-free; about 1.5 µs per block on the 2-core dev machine.
 pub fn compress_block(values: &[Option<(Vec3, Vec3)>; BLOCK_SLOTS]) -> CompressedBlock {
     let used = UsedSlots::gather(values);
     let (endpoints, color_indices) = compress_colors(&used);
