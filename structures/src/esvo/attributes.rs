@@ -413,9 +413,11 @@ pub(super) fn with_slot_index(word: u32, slot: usize, index: usize) -> u32 {
 /// instead of `f32::round`, which without SSE4.1 is a call into libm; exact, since adding
 /// 1.5·2^23 leaves no fraction bits.
 fn round_nearest(x: f32) -> f32 {
-    const SHIFT: f32 = 1.5 * (1u32 << 23) as f32;
-    (x + SHIFT) - SHIFT
+    (x + ROUND_SHIFT) - ROUND_SHIFT
 }
+
+/// 1.5·2^23: added to an f32 of magnitude below 2^22 it leaves no fraction bits.
+pub(super) const ROUND_SHIFT: f32 = 1.5 * (1u32 << 23) as f32;
 
 fn round_vec(v: Vec3) -> Vec3 {
     Vec3::new(round_nearest(v.x), round_nearest(v.y), round_nearest(v.z))

@@ -174,10 +174,10 @@ impl ContourFitter<'_> {
     /// children see. No contour where its ancestors' slab already pins the surface to a
     /// fraction of the voxel ("store one only where it tightens the bound meaningfully").
     fn fit_voxel<T: AsRef<[u32]>>(&self, level: usize, v: &Voxel<T>, buffers: &mut FitBuffers) -> (u32, f32) {
-        let side = voxel_side(level);
-        if level == 0 || v.inherited <= self.inherited_enough * side {
+        if !self.worth_fitting(level, v.inherited) {
             return (0, v.inherited);
         }
+        let side = voxel_side(level);
         let c = v.coords;
         let lo = Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
         let FitBuffers { corners, fit } = buffers;
@@ -187,6 +187,13 @@ impl ContourFitter<'_> {
             Some(f) => (f.contour.0, v.inherited.min(slab_thickness(f.contour, side))),
             None => (0, v.inherited),
         }
+    }
+
+    /// Whether a voxel at `level` whose ancestors' slab is `inherited` thick gets a contour fitted:
+    /// not the root, nor a voxel that slab already pins to [`EsvoParams::contour_inherited`] of
+    /// its side.
+    fn worth_fitting(&self, level: usize, inherited: f32) -> bool {
+        level > 0 && inherited > self.inherited_enough * voxel_side(level)
     }
 
     /// Calls `f` for each child of interior voxel `v` at `level` with its candidate triangles
@@ -211,9 +218,9 @@ impl ContourFitter<'_> {
         for list in lists.iter_mut() {
             list.clear();
         }
-        // Leaves that will not be fitted (`fit_voxel` makes the same test) need no candidates.
-        let skip = level + 2 == self.tree.levels.len() && inherited <= self.inherited_enough * side;
-        if !skip {
+        // Leaves that will not be fitted need no candidates.
+        let leaves = level + 2 == self.tree.levels.len();
+        if !leaves || self.worth_fitting(level + 1, inherited) {
             for &t in v.triangles.as_ref() {
                 let [lo, hi] = self.bounds[t as usize];
                 // Exactly the test `cube_lo ≤ hi && cube_hi ≥ lo` of each child's cube.

@@ -12,8 +12,8 @@
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
 use super::attributes::{
-    BLOCK_SLOTS, CompressedBlock, GRID_COEFFICIENTS, HALF_WORD_SHIFT, NormalGrid, color_palette, encode_axis_vector,
-    encode_normal, encode_rgb565, saturate, slot_index, with_slot_index,
+    BLOCK_SLOTS, CompressedBlock, GRID_COEFFICIENTS, HALF_WORD_SHIFT, NormalGrid, ROUND_SHIFT, color_palette,
+    encode_axis_vector, encode_normal, encode_rgb565, saturate, slot_index, with_slot_index,
 };
 
 /// Power-iteration steps for the principal axes (3×3, so each step is a handful of flops).
@@ -343,10 +343,9 @@ fn nearest_coefficient(x: Vec4) -> Vec4 {
     (2.0 * k - 3.0) * (1.0 / 3.0)
 }
 
-/// [`round_nearest`] per lane.
+/// Round to nearest, ties to even, per lane (as `attributes::round_nearest`).
 fn round_lanes(x: Vec4) -> Vec4 {
-    const SHIFT: f32 = 1.5 * (1u32 << 23) as f32;
-    (x + SHIFT) - SHIFT
+    (x + ROUND_SHIFT) - ROUND_SHIFT
 }
 
 /// Candidates are normalised, so scaling the whole grid changes nothing: it is scaled to put
