@@ -7,9 +7,10 @@
 //! | `svo-naive` | [`cpu::svo_naive`] | `gpu/svo_naive.wgsl` |
 //! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |
 //! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | `gpu/esvo.wgsl` (over `gpu/octree_cast.wgsl`; beam pre-pass `esvo_beam`) |
+//! | `svdag` | [`cpu::svdag`] (over [`cpu::octree_cast`]) | `gpu/svdag.wgsl` (over `gpu/octree_cast.wgsl`) |
 //!
 //! Both triangle kernels share `gpu/triangle.wgsl` (the watertight test of [`cpu::triangle`]) and
-//! `gpu/slab.wgsl` ([`cpu::slab`]); the three voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
+//! `gpu/slab.wgsl` ([`cpu::slab`]); the voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
 //! `[1,2]³` frame of [`cpu::octree_ray`]), and their bindings are in `gpu/voxel.rs`. The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
 //! [`cpu::brute_force`].
 //!

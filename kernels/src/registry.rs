@@ -68,6 +68,13 @@ pub static STRUCTURES: &[StructureEntry] = &[
                   --levels L --contours on|off --attributes raw|compressed --beam on|off",
         build: |input| Ok(Box::new(structures::esvo::Esvo::build(input)?)),
     },
+    StructureEntry {
+        name: "svdag",
+        family: "voxel",
+        summary: "sparse voxel DAG (seed 001, Kämpe 2013): bottom-up merged octree, mask + pointer per child; \
+                  --levels L, svdag.leaves=bricks|bits, svdag.build=stream|octree",
+        build: |input| Ok(Box::new(structures::svdag::Svdag::build(input)?)),
+    },
 ];
 
 fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {

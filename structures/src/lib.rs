@@ -9,12 +9,17 @@
 //! |---|---|---|
 //! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
 //! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
+//! | [`voxel`] | conservative voxelisation, the canonical octree | §4.1 |
+//! | [`svo_naive`], [`svo`] | the plain SVO baselines | §4.2, seeds 004, 001 |
+//! | [`esvo`] | Laine & Karras ESVO | §4.3, seed 000 |
+//! | [`svdag`] | sparse voxel DAG: bottom-up merge, sub-DAG streaming build | §4.4, seed 001 |
 
 pub mod bvh;
 pub mod esvo;
 pub mod grid;
 pub mod memory;
 pub mod params;
+pub mod svdag;
 pub mod svo;
 pub mod svo_naive;
 pub mod voxel;

@@ -159,3 +159,40 @@ fn esvo_variants() {
     }
     assert!(failures.is_empty(), "ESVO variants differ from the CPU beyond the tolerance:\n{}", failures.join("\n"));
 }
+
+/// SVDAG's switches beyond the default (brick leaves): bit leaves, and its words split over eight
+/// bindings, so the generated accessor's chunking is exercised on a DAG whose pointers cross
+/// chunks everywhere.
+#[test]
+fn svdag_variants() {
+    let Some(ctx) = context_for_tests("gpu::svdag_variants") else {
+        return;
+    };
+    let entry = kernels::find_structure("svdag").expect("svdag is registered");
+    let mut failures = Vec::new();
+    for name in ["bunny", "dragon-11k", "menger", "room"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        for leaves in ["bits", "bricks"] {
+            let params = Params::parse(["voxel.levels=9", &format!("svdag.leaves={leaves}")]).expect("params");
+            let t = Instant::now();
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {leaves}: {e}"));
+            failures.extend(compare(ctx, name, &format!("svdag-{leaves}"), accel.as_ref(), &camera, &shade, t));
+            let words = accel.memory().total_bytes() / 4;
+            let chunk = (words as usize).div_ceil(8).max(64);
+            let split = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: Some(chunk) };
+            let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
+            let gpu = render_primary(ctx, accel.as_ref(), &camera, &split)
+                .unwrap_or_else(|e| panic!("{name} {leaves} split: {e}"))
+                .expect("a GPU program");
+            let d = diff(&gpu.frame, &cpu);
+            eprintln!("gpu {name:<12} svdag-{leaves} over bindings of {chunk} words: {d:?}");
+            if d.hit_mismatches > 0 || d.prim_mismatches > 0 || d.max_rel_t > 0.0 {
+                failures.push(format!("{name} svdag-{leaves} split: {d:?}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "SVDAG variants differ from the CPU:\n{}", failures.join("\n"));
+}

@@ -2,7 +2,8 @@
 //! walks the finest grid of the same voxelisation cell by cell:
 //!
 //! - on every built-in scene at L = 7, and on a few at L = 8 (where the bunny already needs far
-//!   pointers), `svo-naive`, `svo` and `esvo` (contours off; raw and compressed attributes) hit
+//!   pointers), `svo-naive`, `svo`, `esvo` (contours off; raw and compressed attributes) and
+//!   `svdag` (bit and brick leaves) hit
 //!   exactly the oracle's voxel at exactly its `t`, bit for bit, on the shared `ray_set` (aimed,
 //!   random, axis-parallel, through vertices, along edges, camera rays);
 //! - at L = 10, on ≥ 99.99 % of the pixels of a primary render;
@@ -19,6 +20,7 @@ use kernels::cpu::render::{Frame, ShadeContext, Workload, render, render_counted
 use kernels::cpu::voxel_dda;
 use scenes::{Camera, Scene};
 use structures::esvo::Esvo;
+use structures::svdag::Svdag;
 use structures::svo::Svo;
 use structures::svo_naive::SvoNaive;
 use structures::voxel::{VoxelGrid, VoxelSet, voxelize_all};
@@ -35,6 +37,8 @@ struct Built {
     svo: Svo,
     esvo_raw: Esvo,
     esvo_compressed: Esvo,
+    svdag_bits: Svdag,
+    svdag_bricks: Svdag,
 }
 
 fn build(scene: &Scene, level: u32, contours: bool) -> Built {
@@ -49,12 +53,20 @@ fn build(scene: &Scene, level: u32, contours: bool) -> Built {
         .expect("valid params")
     };
     let (raw, compressed) = (input("raw"), input("compressed"));
+    let svdag = |leaves: &str| {
+        let params = Params::parse([format!("voxel.levels={level}").as_str(), &format!("svdag.leaves={leaves}")])
+            .expect("valid params");
+        Svdag::build(&BuildInput { scene, triangles: Arc::clone(&triangles), params: &params }).expect("svdag")
+    };
     let svo = Svo::build(&BuildInput { scene, triangles: Arc::clone(&triangles), params: &raw }).expect("svo");
     let (set, _) = voxelize_all(scene, &VoxelGrid::fit(scene.bounds(), level));
     Built {
         naive: SvoNaive::from_svo(&svo),
         esvo_raw: Esvo::build(&BuildInput { scene, triangles: Arc::clone(&triangles), params: &raw }).expect("esvo"),
-        esvo_compressed: Esvo::build(&BuildInput { scene, triangles, params: &compressed }).expect("esvo"),
+        esvo_compressed: Esvo::build(&BuildInput { scene, triangles: Arc::clone(&triangles), params: &compressed })
+            .expect("esvo"),
+        svdag_bits: svdag("bits"),
+        svdag_bricks: svdag("bricks"),
         svo,
         set,
     }
@@ -65,8 +77,14 @@ fn check_exact(name: &str, level: u32, rays: usize) {
     let scene = load(name);
     let b = build(&scene, level, false);
     assert_eq!(b.svo.voxels, b.set.len() as u64, "{name}: the octree holds every voxel");
-    let structures: [(&str, &dyn Traverse); 4] =
-        [("svo-naive", &b.naive), ("svo", &b.svo), ("esvo raw", &b.esvo_raw), ("esvo compressed", &b.esvo_compressed)];
+    let structures: [(&str, &dyn Traverse); 6] = [
+        ("svo-naive", &b.naive),
+        ("svo", &b.svo),
+        ("esvo raw", &b.esvo_raw),
+        ("esvo compressed", &b.esvo_compressed),
+        ("svdag bits", &b.svdag_bits),
+        ("svdag bricks", &b.svdag_bricks),
+    ];
     let mut hits = 0;
     for r in ray_set(&scene, &scene.triangles(), rays, 0x5eed + level as u64) {
         let want = voxel_dda::first_voxel(&b.set, &r.ray, 0.0, f32::INFINITY).map(|h| (h.code, h.t.to_bits()));

@@ -36,7 +36,7 @@ impl CastNodes for Descriptors<'_> {
         self.root
     }
     #[inline(always)]
-    fn fetch(&self, node: u32) -> [u32; 2] {
+    fn fetch(&self, node: u32, _scale: u32) -> [u32; 2] {
         let w = node as usize * 2;
         [self.words[w], self.words[w + 1]]
     }
@@ -49,7 +49,7 @@ impl CastNodes for Descriptors<'_> {
         leaf_mask(d[0]) >> slot & 1 == 1
     }
     #[inline(always)]
-    fn child(&self, node: u32, d: &[u32; 2], slot: u32) -> u32 {
+    fn child(&self, node: u32, d: &[u32; 2], slot: u32, _scale: u32) -> u32 {
         let mut offset = child_ptr(d[0]);
         if is_far(d[0]) {
             offset = self.words[(node + offset) as usize * 2];

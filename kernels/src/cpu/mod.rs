@@ -9,6 +9,7 @@ pub mod octree_cast;
 pub mod octree_ray;
 pub mod render;
 pub mod slab;
+pub mod svdag;
 pub mod svo;
 pub mod svo_naive;
 pub mod triangle;

@@ -27,13 +27,15 @@ pub trait CastNodes {
     type Desc: Copy;
 
     fn root(&self) -> Self::Node;
-    fn fetch(&self, node: Self::Node) -> Self::Desc;
+    /// The data of `node`, whose children are at `scale` (the root's are at `S_MAX − 1`): a
+    /// layout whose levels differ (SVDAG's bricks) tells them apart by scale.
+    fn fetch(&self, node: Self::Node, scale: u32) -> Self::Desc;
     /// Whether child `slot` holds a voxel.
     fn valid(&self, desc: &Self::Desc, slot: u32) -> bool;
     /// Whether child `slot` (a valid voxel at `scale`) is a leaf.
     fn leaf(&self, desc: &Self::Desc, slot: u32, scale: u32) -> bool;
-    /// The node of non-leaf child `slot`.
-    fn child(&self, node: Self::Node, desc: &Self::Desc, slot: u32) -> Self::Node;
+    /// The node of non-leaf child `slot` (a voxel at `scale`).
+    fn child(&self, node: Self::Node, desc: &Self::Desc, slot: u32, scale: u32) -> Self::Node;
     /// The contour of child `slot`, if the layout has one for it.
     #[inline(always)]
     fn contour(&self, _node: Self::Node, _desc: &Self::Desc, _slot: u32) -> Option<u32> {
@@ -116,7 +118,7 @@ pub fn cast<L: CastNodes, S: Stats>(
             Some(d) => d,
             None => {
                 stats.visit();
-                let d = nodes.fetch(parent);
+                let d = nodes.fetch(parent, scale);
                 desc = Some(d);
                 d
             }
@@ -154,7 +156,7 @@ pub fn cast<L: CastNodes, S: Stats>(
                     stats.push();
                 }
                 h = tc_max;
-                parent = nodes.child(parent, &d, slot);
+                parent = nodes.child(parent, &d, slot, scale);
                 desc = None;
                 idx = 0;
                 scale -= 1;

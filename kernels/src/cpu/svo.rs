@@ -28,7 +28,7 @@ impl CastNodes for SvoNodes<'_> {
         0
     }
     #[inline(always)]
-    fn fetch(&self, node: u32) -> [u32; 2] {
+    fn fetch(&self, node: u32, _scale: u32) -> [u32; 2] {
         self.nodes[node as usize]
     }
     #[inline(always)]
@@ -40,7 +40,7 @@ impl CastNodes for SvoNodes<'_> {
         scale == self.leaf_scale
     }
     #[inline(always)]
-    fn child(&self, _node: u32, desc: &[u32; 2], slot: u32) -> u32 {
+    fn child(&self, _node: u32, desc: &[u32; 2], slot: u32, _scale: u32) -> u32 {
         desc[1] + (desc[0] & ((1 << slot) - 1)).count_ones()
     }
 }

@@ -26,7 +26,7 @@ fn node_root() -> u32 {
     return params(ESVO_ROOT);
 }
 
-fn node_fetch(node: u32) -> vec2<u32> {
+fn node_fetch(node: u32, scale: u32) -> vec2<u32> {
     return vec2<u32>(words(2u * node), words(2u * node + 1u));
 }
 
@@ -43,7 +43,7 @@ fn rank(mask: u32, slot: u32) -> u32 {
 }
 
 // Bits 17..31 hold the relative child pointer; bit 16 says it points at a 32-bit far pointer.
-fn node_child(node: u32, desc: vec2<u32>, slot: u32) -> u32 {
+fn node_child(node: u32, desc: vec2<u32>, slot: u32, scale: u32) -> u32 {
     var offset = desc.x >> 17u;
     if ((desc.x & (1u << 16u)) != 0u) {
         offset = words(2u * (node + offset));

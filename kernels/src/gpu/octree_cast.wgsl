@@ -3,10 +3,10 @@
 // functions the structure's own WGSL file defines (the WGSL twin of the `CastNodes` trait):
 //
 //   fn node_root() -> u32
-//   fn node_fetch(node: u32) -> vec2<u32>                  (the cached descriptor)
+//   fn node_fetch(node: u32, scale: u32) -> vec2<u32>      (the cached descriptor; children at scale)
 //   fn node_valid(desc: vec2<u32>, slot: u32) -> bool
 //   fn node_leaf(desc: vec2<u32>, slot: u32, scale: u32) -> bool
-//   fn node_child(node: u32, desc: vec2<u32>, slot: u32) -> u32
+//   fn node_child(node: u32, desc: vec2<u32>, slot: u32, scale: u32) -> u32
 //   fn node_contour(node: u32, desc: vec2<u32>, slot: u32) -> ContourRef
 //
 // Slots passed to them are world child slots (bit set = upper half, x in bit 0). The frame is
@@ -97,7 +97,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
     for (var guard = 0u; guard < MAX_STEPS; guard++) {
         count_step();
         if (!have_desc) {
-            desc = node_fetch(parent);
+            desc = node_fetch(parent, scale);
             have_desc = true;
         }
         // Distances to the current cube's exit planes (its lower faces in the mirrored frame).
@@ -132,7 +132,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
                     stack_t[scale] = t_max;
                 }
                 h = tc_max;
-                parent = node_child(parent, desc, slot);
+                parent = node_child(parent, desc, slot, scale);
                 have_desc = false;
                 idx = 0u;
                 scale -= 1u;

@@ -9,7 +9,7 @@ fn node_root() -> u32 {
     return 0u;
 }
 
-fn node_fetch(node: u32) -> vec2<u32> {
+fn node_fetch(node: u32, scale: u32) -> vec2<u32> {
     return vec2<u32>(nodes(2u * node), nodes(2u * node + 1u));
 }
 
@@ -21,7 +21,7 @@ fn node_leaf(desc: vec2<u32>, slot: u32, scale: u32) -> bool {
     return scale == S_MAX - params(4u);
 }
 
-fn node_child(node: u32, desc: vec2<u32>, slot: u32) -> u32 {
+fn node_child(node: u32, desc: vec2<u32>, slot: u32, scale: u32) -> u32 {
     return desc.y + countOneBits(desc.x & ((1u << slot) - 1u));
 }
 

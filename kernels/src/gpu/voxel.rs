@@ -1,6 +1,6 @@
-//! GPU bindings of the voxel structures (`svo-naive`, `svo`, `esvo`): each is one WGSL file over
+//! GPU bindings of the voxel structures (`svo-naive`, `svo`, `esvo`, `svdag`): each is one WGSL file over
 //! the shared ray set-up (`octree_ray.wgsl`) and, for `svo` and `esvo`, the shared Laine–Karras
-//! caster (`octree_cast.wgsl`), plus the few words below that describe its buffers.
+//! caster (`octree_cast.wgsl`) for `svo`, `esvo` and `svdag`, plus the few words below that describe its buffers.
 //!
 //! Every kernel's `params` buffer starts with the voxel grid: origin (3 × f32 bits), `1 / size`
 //! (f32 bits, computed here exactly as `VoxelGrid::to_octree_space` computes it, so GPU and CPU
@@ -10,6 +10,7 @@ use std::borrow::Cow;
 
 use scenes::Camera;
 use structures::esvo::Esvo;
+use structures::svdag::{Leaves, Svdag};
 use structures::svo::Svo;
 use structures::svo_naive::SvoNaive;
 use structures::voxel::VoxelGrid;
@@ -19,6 +20,8 @@ use super::{GpuBuffer, GpuProgram, PrePass};
 const SVO_NAIVE_WGSL: &str = concat!(include_str!("octree_ray.wgsl"), include_str!("svo_naive.wgsl"));
 const SVO_WGSL: &str =
     concat!(include_str!("octree_ray.wgsl"), include_str!("octree_cast.wgsl"), include_str!("svo.wgsl"));
+const SVDAG_WGSL: &str =
+    concat!(include_str!("octree_ray.wgsl"), include_str!("octree_cast.wgsl"), include_str!("svdag.wgsl"));
 const ESVO_WGSL: &str =
     concat!(include_str!("octree_ray.wgsl"), include_str!("octree_cast.wgsl"), include_str!("esvo.wgsl"));
 
@@ -81,5 +84,20 @@ pub fn esvo<'a>(esvo: &'a Esvo, camera: &Camera) -> GpuProgram<'a> {
         buffers: vec![params(p), GpuBuffer::words_of("words", &esvo.words)],
         prepass: beam.then_some(PrePass { entry: "esvo_beam", invocations: corners }),
         scratch_words: if beam { corners as usize } else { 0 },
+    }
+}
+
+/// The SVDAG's words as built; `params` adds the leaf encoding and the occupied box.
+pub fn svdag(dag: &Svdag) -> GpuProgram<'_> {
+    let flags = u32::from(!dag.is_empty()) | u32::from(dag.leaves == Leaves::Bricks) << 1;
+    let mut p = grid_words(&dag.grid);
+    p.push(flags);
+    p.extend(dag.occupied.iter().flat_map(|c| c.to_array().map(f32::to_bits)));
+    GpuProgram {
+        label: "svdag",
+        wgsl: SVDAG_WGSL,
+        buffers: vec![params(p), GpuBuffer::words_of("words", &dag.words)],
+        prepass: None,
+        scratch_words: 0,
     }
 }

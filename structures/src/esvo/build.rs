@@ -12,7 +12,7 @@ use super::attributes::{CompressedBlock, compress_block, encode_abgr, encode_nor
 use super::contour::{FitParams, FitScratch, fit_with};
 use super::layout::*;
 use super::{Attributes, Esvo, EsvoParams, EsvoStats};
-use crate::voxel::{self, Octree, morton};
+use crate::voxel::{self, Octree};
 
 /// Offsets predicted above this many slots get a far pointer. The prediction leaves out page
 /// headers and the padding before a run that would straddle a page (at most 17 slots per page
@@ -546,18 +546,9 @@ impl<'a> Emitter<'a> {
 fn occupied_box(tree: &Octree) -> [Vec3; 2] {
     let root = [Vec3::ONE, Vec3::splat(2.0)];
     let Some(level) = tree.levels.len().checked_sub(2).filter(|&l| l > 0) else { return root };
-    let codes = &tree.levels[level].codes;
-    if codes.is_empty() {
-        return root;
-    }
-    let (lo, hi) = codes.iter().fold(([u32::MAX; 3], [0; 3]), |(lo, hi), &code| {
-        let c = morton::decode(code);
-        (std::array::from_fn(|a| lo[a].min(c[a])), std::array::from_fn(|a| hi[a].max(c[a])))
-    });
-    // 1 + c / 2^level is exact: the planes are the voxels' own planes, bit for bit.
-    let side = voxel_side(level);
-    let corner = |c: [u32; 3]| Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
-    [corner(lo), corner(hi.map(|c| c + 1))]
+    let mut bounds = voxel::CodeBounds::default();
+    tree.levels[level].codes.iter().for_each(|&code| bounds.add(code));
+    bounds.octree_box(level as u32)
 }
 
 /// Which of the children (with predicted subtree sizes `subs`, laid out in this order right after

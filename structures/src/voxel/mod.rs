@@ -122,10 +122,51 @@ impl VoxelSet {
     }
 }
 
-/// The level of the sub-cubes [`voxelize`] streams: each sub-cube is at most `2^7` voxels per
-/// axis, so every octree node at a level `≥ subcube_level(L)` is complete within one chunk.
+/// The level of the sub-cubes [`voxelize`] streams: each sub-cube is `2^7` voxels per axis (the
+/// whole grid below that), wider only where the sub-cube grid would pass `2^9` per axis (L > 16).
+/// Every octree node at a level `≥ subcube_level(L)` is complete within one chunk.
 pub fn subcube_level(level: u32) -> u32 {
-    level.saturating_sub(7)
+    voxelize::subcube_side_bits(level).map_or(0, |side| level - side)
+}
+
+/// The bounding box of a set of voxel codes at one level, accumulated code by code: the box
+/// voxel casters clip rays to (`Esvo::occupied`, `Svdag::occupied`), so rays through the root
+/// cube's empty margin cost nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct CodeBounds {
+    lo: [u32; 3],
+    hi: [u32; 3],
+}
+
+impl Default for CodeBounds {
+    fn default() -> Self {
+        Self { lo: [u32::MAX; 3], hi: [0; 3] }
+    }
+}
+
+impl CodeBounds {
+    #[inline]
+    pub fn add(&mut self, code: u64) {
+        let c = morton::decode(code);
+        self.lo = std::array::from_fn(|a| self.lo[a].min(c[a]));
+        self.hi = std::array::from_fn(|a| self.hi[a].max(c[a]));
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lo[0] > self.hi[0]
+    }
+
+    /// The box in octree space (`[1, 2]³`, world-oriented) of the added codes, taken as voxels of
+    /// a `2^level` grid; the root cube when nothing was added. Its planes are the voxels' own
+    /// planes, bit for bit (`1 + c / 2^level` is exact).
+    pub fn octree_box(&self, level: u32) -> [Vec3; 2] {
+        if self.is_empty() {
+            return [Vec3::ONE, Vec3::splat(2.0)];
+        }
+        let side = 1.0 / (1u64 << level) as f32;
+        let corner = |c: [u32; 3]| Vec3::ONE + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * side;
+        [corner(self.lo), corner(self.hi.map(|c| c + 1))]
+    }
 }
 
 /// The voxel level of a build: `voxel.levels` (the harness's `--levels L`), default 10.

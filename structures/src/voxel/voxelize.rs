@@ -35,6 +35,12 @@ const MAX_SUBCUBE_LEVEL: u32 = 9;
 /// local code plus a 32-bit list position still fit one `u64` key.
 pub const MAX_VOXELIZE_LEVEL: u32 = MAX_SUBCUBE_LEVEL + 10;
 
+/// log2 of the side, in voxels, of the sub-cubes a grid of `2^level` voxels per axis is streamed
+/// by (`None` past [`MAX_VOXELIZE_LEVEL`]).
+pub(crate) fn subcube_side_bits(level: u32) -> Option<u32> {
+    (level <= MAX_VOXELIZE_LEVEL).then(|| level.min(SUBCUBE_BITS).max(level.saturating_sub(MAX_SUBCUBE_LEVEL)))
+}
+
 /// Slack added to every voxel's half side, relative to the voxel size, so that a triangle
 /// touching a voxel's closed box within rounding marks it (a triangle lying on a face marks the
 /// voxels on both sides).
@@ -175,7 +181,7 @@ impl<'a> Voxelizer<'a> {
         let origin = grid.origin.as_dvec3();
         let far = origin.abs().max((origin + DVec3::splat(grid.size as f64)).abs()).max_element();
         let face_error = far * (f32::EPSILON as f64 * 0.5) / voxel;
-        let side_bits = grid.level.min(SUBCUBE_BITS).max(grid.level.saturating_sub(MAX_SUBCUBE_LEVEL));
+        let side_bits = subcube_side_bits(grid.level).unwrap_or(grid.level);
         Self {
             mesh,
             origin,

@@ -1,0 +1,116 @@
+//! CPU kernel of the SVDAG (`structures::svdag`): the Laine–Karras caster of
+//! [`super::octree_cast`] over the DAG's words, a child found by popcount (child `i` at word
+//! `node + 1 + popcount(mask & ((1 << i) − 1))`). A node's position is never read: the caster's
+//! `pos` and `scale` are the path taken (seed 001 §2.3). Each ray is first clipped to the box the
+//! leaves occupy, as ESVO's is. WGSL twin: `kernels/src/gpu/svdag.wgsl`.
+//!
+//! The `Node` register is a word index, except below a brick: a brick (level `L − 2`) stands for
+//! two levels, and its children, the 2×2×2 voxel groups, have no words of their own — their
+//! `Node` is the group's 8-bit voxel mask itself. The scale says which: children at the leaf scale
+//! belong to a brick's child (bricks) or a bottom mask word (bits); children one scale up belong
+//! to a brick.
+
+use glam::Vec3;
+use scenes::{Camera, Ray};
+use structures::svdag::layout::{CHILD_MASK, brick_byte, brick_child_mask, brick_mask, pointer_index};
+use structures::svdag::{Leaves, Svdag};
+use structures::voxel::morton;
+
+use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
+use super::octree_ray::{OctreeRay, S_MAX};
+use crate::gpu::GpuProgram;
+use crate::{Counters, Hit, NoStats, Stats, Traverse};
+
+/// The DAG's words as the caster sees them. `Desc` is `[child mask, node]`.
+struct DagNodes<'a> {
+    words: &'a [u32],
+    /// Scale of the leaf voxels (`S_MAX − L`).
+    leaf_scale: u32,
+    bricks: bool,
+}
+
+impl CastNodes for DagNodes<'_> {
+    type Node = u32;
+    type Desc = [u32; 2];
+
+    #[inline(always)]
+    fn root(&self) -> u32 {
+        0
+    }
+    #[inline(always)]
+    fn fetch(&self, node: u32, scale: u32) -> [u32; 2] {
+        if self.bricks {
+            if scale == self.leaf_scale {
+                // A brick's child: the node is its voxel mask.
+                return [node, node];
+            }
+            if scale == self.leaf_scale + 1 {
+                return [brick_child_mask(brick_mask(self.words, node as usize)), node];
+            }
+        }
+        [self.words[node as usize] & CHILD_MASK, node]
+    }
+    #[inline(always)]
+    fn valid(&self, d: &[u32; 2], slot: u32) -> bool {
+        d[0] >> slot & 1 == 1
+    }
+    #[inline(always)]
+    fn leaf(&self, _d: &[u32; 2], _slot: u32, scale: u32) -> bool {
+        scale == self.leaf_scale
+    }
+    #[inline(always)]
+    fn child(&self, node: u32, d: &[u32; 2], slot: u32, scale: u32) -> u32 {
+        if self.bricks && scale == self.leaf_scale + 1 {
+            return brick_byte(brick_mask(self.words, node as usize), slot);
+        }
+        self.words[pointer_index(node, d[0], slot) as usize]
+    }
+}
+
+/// The normal of the face through which the octree-space ray entered the hit voxel's cube: the
+/// axis whose entry plane is crossed last (a ray starting inside the voxel gets the same rule).
+fn face_normal(ray: &Ray, h: &CastHit<u32>) -> Vec3 {
+    let mut best = (f32::NEG_INFINITY, Vec3::ZERO);
+    for a in 0..3 {
+        let d = ray.dir[a];
+        if d == 0.0 {
+            continue;
+        }
+        let plane = if d > 0.0 { h.cube_min[a] } else { h.cube_min[a] + h.cube_size };
+        let t = (plane - ray.origin[a]) / d;
+        if t > best.0 {
+            let mut n = Vec3::ZERO;
+            n[a] = -d.signum();
+            best = (t, n);
+        }
+    }
+    best.1
+}
+
+fn trace<S: Stats>(dag: &Svdag, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    if dag.is_empty() {
+        return None;
+    }
+    let nodes =
+        DagNodes { words: &dag.words, leaf_scale: S_MAX - dag.grid.level, bricks: dag.leaves == Leaves::Bricks };
+    let oray = dag.grid.to_octree_space(ray);
+    let r = OctreeRay::from_octree_space(&oray);
+    // Only the box the leaves occupy can hold a hit (exact, as in `cpu::esvo`).
+    let (enter, exit) = r.box_span(dag.occupied[0], dag.occupied[1]);
+    let h = cast(&nodes, &oray, &r, t_min.max(enter), t_max.min(exit), CastOptions::default(), None, stats)?;
+    Some(Hit { t: h.t, normal: face_normal(&oray, &h), prim: morton::encode(h.coords) })
+}
+
+impl Traverse for Svdag {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, &mut NoStats)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::svdag(self))
+    }
+}
