@@ -74,6 +74,11 @@ pub enum Preset {
     /// Seed 002 Table 1: ORG, UG, RG, RG-2 and the reference BVH on every built-in scene at
     /// 500×500, in the paper's layout (N_c, N_p, T_c, T_r with ratios to ORG).
     OrgTable1,
+    /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
+    /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
+    /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;
+    /// with the paper's figures and growth per doubling. Long: about 15 minutes on 2 cores.
+    SvdagTables,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -129,9 +134,10 @@ pub struct RunArgs {
     /// Untimed warm-up repetitions before the timed ones.
     #[arg(long)]
     pub warmup: Option<u32>,
-    /// Voxel structures (svo-naive, svo, esvo): resolution 2^L per axis; a list (e.g. 8,10,12)
-    /// measures each voxel structure once per level, for the report's scaling plots. Overrides
-    /// voxel.levels (default 10; presets: quick and ci 7, default 9).
+    /// Voxel structures (svo-naive, svo, esvo, svdag): resolution 2^L per axis; a list (e.g.
+    /// 8,10,12) measures each voxel structure once per level, for the report's scaling plots.
+    /// Overrides voxel.levels (default 10; presets: quick and ci 7, default 9) and a preset's own
+    /// level sweep (svdag-tables).
     #[arg(long, value_name = "L,...", value_delimiter = ',')]
     pub levels: Vec<u32>,
     /// ESVO: fit, store and intersect contours (sets esvo.contours; default on).
@@ -231,6 +237,28 @@ impl Preset {
             Preset::OrgFig1 => "org-fig1",
             Preset::OrgFig2 => "org-fig2",
             Preset::OrgTable1 => "org-table1",
+            Preset::SvdagTables => "svdag-tables",
+        }
+    }
+
+    /// The cases the preset measures of `structure`: per case the parameters it sets (over the
+    /// run's) and the variant that names it beside its resolution; empty: one case with the
+    /// run's parameters. `--levels` replaces this with a plain level sweep.
+    pub fn sweep(self, structure: &str) -> Vec<(Vec<String>, Option<String>)> {
+        let at = |level: u32, extra: &[&str], variant: Option<&str>| {
+            let mut params = vec![format!("voxel.levels={level}")];
+            params.extend(extra.iter().map(|p| p.to_string()));
+            (params, variant.map(String::from))
+        };
+        match (self, structure) {
+            // Tables 1–2 at 512³ and 1024³ (the paper's 1000³).
+            (Preset::SvdagTables, "svo" | "esvo") => (9..=10).map(|l| at(l, &[], None)).collect(),
+            // Table 3's 128³…2048³ in the seed's encoding; Kämpe's bricks where storage is compared.
+            (Preset::SvdagTables, "svdag") => (7..=11)
+                .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
+                .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
+                .collect(),
+            _ => Vec::new(),
         }
     }
 
@@ -240,6 +268,7 @@ impl Preset {
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
+            Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -254,6 +283,8 @@ impl Preset {
             // Small voxel resolutions keep the quick and CI matrices short.
             Preset::Quick | Preset::Ci => &["voxel.levels=7"],
             Preset::Default => &["voxel.levels=9"],
+            // Table 3 times the SVO → SVDAG conversion alone: build the octree first.
+            Preset::SvdagTables => &["svdag.build=octree"],
         }
     }
 
@@ -268,6 +299,7 @@ impl Preset {
                 vec!["grass-1k", "grass-2k", "grass-5k", "grass-10k", "grass-20k", "grass-50k", "grass-100k"]
             }
             Preset::OrgFig2 => vec!["dragon-11k", "dragon-48k", "dragon-203k", "dragon", "dragon@sub1"],
+            Preset::SvdagTables => vec!["bunny", "dragon", "menger", "city", "mandelbulb"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -288,6 +320,7 @@ impl Preset {
             Preset::Default => (512, 512),
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
+            Preset::SvdagTables => (512, 512),
         }
     }
 }

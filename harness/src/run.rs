@@ -65,8 +65,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
             let load_ms = ms_since(t);
             let mut ctx = SceneRun::new(&scene, load_ms, gpu);
             for structure in &plan.structures {
-                for params in variants(&plan, &params, structure) {
-                    let case = measure_case(&mut ctx, structure, &params, &plan, args, &out, &bar)
+                for (params, variant) in variants(&plan, &params, structure) {
+                    let case = measure_case(&mut ctx, structure, &params, variant, &plan, args, &out, &bar)
                         .with_context(|| format!("scene '{scene_name}', structure '{structure}'"))?;
                     bar.suspend(|| eprintln!("{}", one_line(&case)));
                     out.push_case(case)?;
@@ -86,15 +86,24 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     Ok(())
 }
 
-/// The parameter sets one structure is measured with: one per `--levels` entry for a voxel
-/// structure, otherwise just the run's.
-fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<Params> {
+/// The parameter sets one structure is measured with, each with its variant label: one per
+/// `--levels` entry for a voxel structure, else the preset's own sweep, otherwise just the run's.
+fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Option<String>)> {
     let voxel = kernels::find_structure(structure).is_some_and(|e| e.family == "voxel");
     if voxel && !plan.levels.is_empty() {
-        plan.levels.iter().map(|&l| params.with("voxel.levels", l)).collect()
-    } else {
-        vec![params.clone()]
+        return plan.levels.iter().map(|&l| (params.with("voxel.levels", l), None)).collect();
     }
+    let sweep = plan.preset.sweep(structure);
+    if sweep.is_empty() {
+        return vec![(params.clone(), None)];
+    }
+    sweep
+        .into_iter()
+        .map(|(set, variant)| {
+            let p = set.iter().filter_map(|kv| kv.split_once('=')).fold(params.clone(), |p, (k, v)| p.with(k, v));
+            (p, variant)
+        })
+        .collect()
 }
 
 /// Refuses to time a build without optimisation unless told to (DESIGN.md §1).
@@ -185,10 +194,12 @@ impl<'a> SceneRun<'a> {
     }
 }
 
+#[allow(clippy::too_many_arguments)] // one case of the matrix and where it goes
 fn measure_case(
     ctx: &mut SceneRun,
     structure: &str,
     params: &Params,
+    variant: Option<String>,
     plan: &Plan,
     args: &RunArgs,
     out: &RunOutput,
@@ -220,6 +231,7 @@ fn measure_case(
         structure: structure.into(),
         params: accel.params(),
         resolution: accel.resolution(),
+        variant,
         build,
         memory: MemoryStats {
             bytes: memory.total_bytes(),
@@ -271,11 +283,14 @@ fn measure_case(
                 stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
             }
             if !args.no_images {
-                // Voxel cases of a level sweep differ only in their resolution.
-                let label = match case.resolution {
+                // Voxel cases of a sweep differ in their resolution and variant.
+                let mut label = match case.resolution {
                     Some(r) => format!("{structure}-{r}"),
                     None => structure.to_string(),
                 };
+                if let Some(v) = &case.variant {
+                    label = format!("{label}-{}", v.replace(['=', '.', '/'], "_"));
+                }
                 let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
                 case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, &heat)?);
             }
@@ -435,10 +450,13 @@ fn one_line(case: &Case) -> String {
             )
         })
         .collect();
-    let structure = match case.resolution {
+    let mut structure = match case.resolution {
         Some(r) => format!("{} {r}³", case.structure),
         None => case.structure.clone(),
     };
+    if let Some(v) = &case.variant {
+        structure = format!("{structure} [{v}]");
+    }
     format!(
         "  {:<12} {:<14} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",
         case.scene,

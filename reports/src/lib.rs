@@ -12,5 +12,6 @@ pub mod paper;
 pub mod plots;
 pub mod scaling;
 pub mod schema;
+pub mod svdag_tables;
 
 pub use schema::*;

@@ -1,7 +1,7 @@
 //! Paper results reproduced from a run (DESIGN.md §9): Fig. 1, Fig. 2 and Table 1 of seed 002
-//! (Li & Wang 2011), each in the paper's layout, with fitted growth exponents; and, for any run
-//! with ESVO cases, its bytes per voxel beside seed 000's budget. The papers' claims are marked
-//! held or not held.
+//! (Li & Wang 2011), each in the paper's layout, with fitted growth exponents; seed 001's SVDAG
+//! tables ([`crate::svdag_tables`]); and, for any run with ESVO cases, its bytes per voxel beside
+//! seed 000's budget. The papers' claims are marked held or not held.
 
 use std::fmt::Write;
 
@@ -18,6 +18,7 @@ pub fn section(results: &Results) -> String {
         "org-fig1" => scaling(results, Scaling::FIG1),
         "org-fig2" => scaling(results, Scaling::FIG2),
         "org-table1" => table1(results),
+        "svdag-tables" => crate::svdag_tables::section(results),
         _ => String::new(),
     };
     out.push_str(&esvo_budget(results));
@@ -99,11 +100,11 @@ pub fn growth_exponent(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-fn cpu_render_ms(case: &Case) -> Option<f64> {
+pub(crate) fn cpu_render_ms(case: &Case) -> Option<f64> {
     case.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary").map(|r| r.timing.ms_median)
 }
 
-fn held(ok: bool) -> &'static str {
+pub(crate) fn held(ok: bool) -> &'static str {
     if ok { "**held**" } else { "**not held**" }
 }
 

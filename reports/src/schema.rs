@@ -84,6 +84,10 @@ pub struct Case {
     /// Voxel structures: the grid resolution `2^L`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub resolution: Option<u64>,
+    /// A preset's setting that tells this case apart from others of the same structure and
+    /// resolution (e.g. `leaves=bits` for `svdag`); `None` for a run's only setting.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub variant: Option<String>,
     pub build: BuildStats,
     pub memory: MemoryStats,
     pub render: Vec<RenderStats>,
@@ -107,11 +111,16 @@ pub struct SkippedRender {
 }
 
 impl Case {
-    /// How tables and plots name the case: the structure, tagged with its machine when merged.
+    /// How tables and plots name the case: the structure with its variant, tagged with its
+    /// machine when merged.
     pub fn label(&self) -> String {
+        let mut label = self.structure.clone();
+        if let Some(v) = &self.variant {
+            label = format!("{label} [{v}]");
+        }
         match &self.machine {
-            Some(tag) => format!("{} @ {tag}", self.structure),
-            None => self.structure.clone(),
+            Some(tag) => format!("{label} @ {tag}"),
+            None => label,
         }
     }
 }

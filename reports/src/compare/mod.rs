@@ -138,13 +138,20 @@ pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Compar
 }
 
 fn same_case(a: &Case, b: &Case) -> bool {
-    a.scene == b.scene && a.structure == b.structure && a.resolution == b.resolution && a.machine == b.machine
+    a.scene == b.scene
+        && a.structure == b.structure
+        && a.resolution == b.resolution
+        && a.variant == b.variant
+        && a.machine == b.machine
 }
 
 fn case_name(c: &Case) -> String {
     let mut name = c.structure.clone();
     if let Some(r) = c.resolution {
         let _ = write!(name, " {r}³");
+    }
+    if let Some(v) = &c.variant {
+        let _ = write!(name, " [{v}]");
     }
     if let Some(tag) = &c.machine {
         let _ = write!(name, " @ {tag}");

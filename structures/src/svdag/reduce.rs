@@ -26,6 +26,7 @@ use std::hash::BuildHasher;
 
 use foldhash::fast::FixedState;
 use hashbrown::HashTable;
+use rayon::prelude::*;
 
 use super::layout::{BRICK_LEVELS, Leaves, NodeKind, brick_words, node_words};
 use crate::voxel::Octree;
@@ -43,6 +44,10 @@ pub struct LevelStore {
     /// Nodes met (before merging): the SVO's node count at this level.
     pub raw: u64,
 }
+
+/// The fewest nodes a parallel run of [`LevelStore::intern_all`] takes: below this, splitting
+/// costs more than it saves.
+const MIN_RUN: usize = 1 << 14;
 
 /// The fixed-seed foldhash every level uses (the layout never depends on hash values: nodes are
 /// ordered by first occurrence).
@@ -93,6 +98,52 @@ impl LevelStore {
                 offset
             }
         }
+    }
+
+    /// Interns `n` nodes in order — node `i`'s words written by `key_of(i, buf)`, which returns
+    /// their count — and returns each one's offset; the same words and offsets as `n` calls of
+    /// [`Self::intern`]. Contiguous runs of nodes are first merged among themselves in parallel,
+    /// each into a small table of its own, then the runs' unique nodes into this level in run
+    /// order: a node new to the level is met first in the earliest run holding it, at the same
+    /// place as in one pass, so first-met order, and with it the layout, is unchanged.
+    pub fn intern_all(&mut self, n: usize, key_of: impl Fn(usize, &mut [u32; 9]) -> usize + Sync) -> Vec<u32> {
+        let runs = (rayon::current_num_threads() * 4).clamp(1, n.div_ceil(MIN_RUN).max(1));
+        let run_len = n.div_ceil(runs).max(1);
+        let kind = self.kind;
+        let local: Vec<(LevelStore, Vec<u32>)> = (0..n.div_ceil(run_len))
+            .into_par_iter()
+            .map(|r| {
+                let mut store = LevelStore::new(kind);
+                let mut key = [0u32; 9];
+                let offsets = (r * run_len..((r + 1) * run_len).min(n))
+                    .map(|i| {
+                        let len = key_of(i, &mut key);
+                        store.intern(&key[..len])
+                    })
+                    .collect();
+                (store, offsets)
+            })
+            .collect();
+        // At most every run's unique nodes are new here: reserve for them, so neither the table
+        // nor the words grow (and rehash or copy) while merging.
+        let (nodes, words) = local.iter().fold((0, 0), |(n, w), (s, _)| (n + s.unique as usize, w + s.words.len()));
+        let kind_words = &self.words;
+        self.table
+            .reserve(nodes, |&o| hash(&kind_words[o as usize..o as usize + node_words(kind, kind_words[o as usize])]));
+        self.words.reserve(words);
+        let mut out = Vec::with_capacity(n);
+        for (store, offsets) in local {
+            self.raw += store.raw;
+            let mut remap = vec![0u32; store.words.len()];
+            let mut o = 0;
+            while o < store.words.len() {
+                let node = store.node(o);
+                remap[o] = self.intern_merged(node);
+                o += node.len();
+            }
+            out.extend(offsets.iter().map(|&o| remap[o as usize]));
+        }
+        out
     }
 
     /// The node at word `offset`.
@@ -186,40 +237,39 @@ impl Dag {
         // The offsets of the previous (lower) level's nodes, by node index.
         let mut below: Vec<u32> = match leaves {
             Leaves::Bits => {
-                tree.levels[bottom].masks.iter().map(|&m| dag.at(bottom as u32).intern(&[m as u32])).collect()
+                let masks = &tree.levels[bottom].masks;
+                dag.at(bottom as u32).intern_all(masks.len(), |i, key| {
+                    key[0] = masks[i] as u32;
+                    1
+                })
             }
             Leaves::Bricks => {
                 let (nodes, children) = (&tree.levels[bottom], &tree.levels[bottom + 1]);
-                let store = dag.at(bottom as u32);
-                (0..nodes.len())
-                    .map(|i| {
-                        let mut brick = 0u64;
-                        let mut child = nodes.first_child[i] as usize;
-                        for c in 0..8 {
-                            if nodes.masks[i] >> c & 1 == 1 {
-                                brick |= (children.masks[child] as u64) << (8 * c);
-                                child += 1;
-                            }
+                dag.at(bottom as u32).intern_all(nodes.len(), |i, key| {
+                    let mut brick = 0u64;
+                    let mut child = nodes.first_child[i] as usize;
+                    for c in 0..8 {
+                        if nodes.masks[i] >> c & 1 == 1 {
+                            brick |= (children.masks[child] as u64) << (8 * c);
+                            child += 1;
                         }
-                        store.intern(&brick_words(brick))
-                    })
-                    .collect()
+                    }
+                    key[..2].copy_from_slice(&brick_words(brick));
+                    2
+                })
             }
         };
-        let mut key = [0u32; 9];
         for l in (0..bottom).rev() {
             let nodes = &tree.levels[l];
-            let store = dag.at(l as u32);
-            below = (0..nodes.len())
-                .map(|i| {
-                    let mask = nodes.masks[i] as u32;
-                    let n = mask.count_ones() as usize;
-                    let first = nodes.first_child[i] as usize;
-                    key[0] = mask;
-                    key[1..1 + n].copy_from_slice(&below[first..first + n]);
-                    store.intern(&key[..1 + n])
-                })
-                .collect();
+            let children = &below;
+            below = dag.at(l as u32).intern_all(nodes.len(), |i, key| {
+                let mask = nodes.masks[i] as u32;
+                let n = mask.count_ones() as usize;
+                let first = nodes.first_child[i] as usize;
+                key[0] = mask;
+                key[1..1 + n].copy_from_slice(&children[first..first + n]);
+                1 + n
+            });
         }
         (dag, Some(below[0]))
     }
