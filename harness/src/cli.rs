@@ -181,17 +181,30 @@ pub struct CompareArgs {
     /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2.
     /// Overrides --thresholds. Metrics and defaults: bytes, components, nodes, pointers 1e-9;
     /// triangles, hit_mismatches, prim_mismatches exact; steps_per_ray, visits_per_ray,
-    /// tests_per_ray, hit_fraction 1e-6; render, build, render_geomean, build_geomean 0.15 (ratios
-    /// to the reference); render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter
-    /// times are shown, not gated).
+    /// tests_per_ray, hit_fraction 1e-6; render 0.35 and build 1.0 per case (ratios to the
+    /// reference, judged on their 95 % bootstrap interval); render_geomean, build_geomean 0.15 per
+    /// structure; render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter times are
+    /// shown, not gated); probe_tolerance 0.25 (machines comparable for --timing-gate auto).
     #[arg(long = "threshold", value_name = "METRIC=FRACTION")]
     pub thresholds: Vec<String>,
-    /// TOML file of `metric = fraction` lines (see .ci/thresholds.toml).
+    /// TOML file of `metric = fraction` lines, e.g. `render = 0.2`.
     #[arg(long = "thresholds", value_name = "FILE")]
     pub threshold_file: Option<PathBuf>,
     /// Print every compared metric, not only those that changed beyond their threshold.
     #[arg(long)]
     pub all: bool,
+    /// When timing ratios are gated: auto (when both runs' machine probes agree within
+    /// probe_tolerance, default 25 %), always, or never (deterministic metrics only). Deterministic
+    /// metrics are always gated.
+    #[arg(long, value_enum, default_value_t = TimingGateArg::Auto)]
+    pub timing_gate: TimingGateArg,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimingGateArg {
+    Auto,
+    Always,
+    Never,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -2,9 +2,9 @@
 //! table of changes and the verdict. The judgement itself is `reports::compare`.
 
 use anyhow::{Context, Result};
-use reports::compare::{self, Thresholds};
+use reports::compare::{self, Thresholds, TimingGate};
 
-use crate::cli::CompareArgs;
+use crate::cli::{CompareArgs, TimingGateArg};
 use crate::output::read_results;
 
 /// Prints the comparison; `Ok(true)` when nothing regressed and no baseline case is missing.
@@ -19,11 +19,17 @@ pub fn compare(args: &CompareArgs) -> Result<bool> {
     }
     let (_, new) = read_results(&args.new).context("NEW")?;
     let (_, base) = read_results(&args.base).context("BASE")?;
-    let cmp = compare::compare(&new, &base, &thresholds);
+    let gate = match args.timing_gate {
+        TimingGateArg::Auto => TimingGate::Auto,
+        TimingGateArg::Always => TimingGate::Always,
+        TimingGateArg::Never => TimingGate::Never,
+    };
+    let cmp = compare::compare_with(&new, &base, &thresholds, gate);
     println!("harness compare: NEW {} against BASE {}", args.new.display(), args.base.display());
     for w in &cmp.warnings {
         println!("warning: {w}");
     }
+    println!("{}", cmp.timing_reason);
     let table = cmp.table(args.all);
     if table.is_empty() {
         println!("every compared metric is within its threshold (--all lists them)");

@@ -9,6 +9,7 @@ mod images;
 mod machine;
 mod merge;
 mod output;
+mod probes;
 mod run;
 
 use std::process::ExitCode;
@@ -86,5 +87,8 @@ fn list(what: ListWhat) {
         println!("  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on grass-1k…100k");
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");
         println!("  org-table1 seed 002 Table 1: org, ug, rg, rg2, bvh on every built-in scene at 500×500");
+        println!(
+            "  svdag-tables seed 001 Tables 1–3, Fig. 13: svo, esvo, svdag on bunny, dragon, menger, city, mandelbulb"
+        );
     }
 }

@@ -64,6 +64,9 @@ fn header(out: &mut String, r: &Results) {
         m.os,
         m.arch
     );
+    if let Some(p) = &m.probes {
+        let _ = writeln!(out, "- machine probes: {}", p.describe());
+    }
     let _ = writeln!(
         out,
         "- settings: preset `{}`, {}×{}, {} threads, {} warm-up + {} timed reps, workloads {}, harness built `{}`",

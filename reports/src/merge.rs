@@ -100,6 +100,8 @@ fn summary_machine(runs: &[MergedRun]) -> Machine {
         cpu: join(&|m| format!("{}: {}", m.tag, m.machine.cpu)),
         cores: runs.iter().map(|m| m.machine.cores).max().unwrap_or(0),
         memory_bytes: runs.iter().map(|m| m.machine.memory_bytes).max().unwrap_or(0),
+        // Each run's own probes stay with its record in `merged`.
+        probes: None,
     }
 }
 

@@ -43,6 +43,62 @@ pub struct Machine {
     /// Logical cores the OS reports.
     pub cores: usize,
     pub memory_bytes: u64,
+    /// Fixed measurements of the machine's speed (absent in runs recorded before they existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probes: Option<Probes>,
+}
+
+/// Machine probes (`harness/src/probes.rs`): a few fixed, cheap measurements, each the best of a
+/// few trials, that tell a slower machine from a slower structure. `harness compare` gates timing
+/// ratios only between runs whose probes agree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Probes {
+    /// ns per dependent random load over 1, 8 and 64 MiB.
+    pub latency_ns_1mib: f64,
+    pub latency_ns_8mib: f64,
+    pub latency_ns_64mib: f64,
+    /// Streaming read bandwidth over 64 MiB, GB/s.
+    pub read_gb_s: f64,
+    /// ns per 4 KiB page at the first touch of a fresh allocation.
+    pub page_fault_ns: f64,
+    /// ns per iteration of a fixed dependent integer loop on one core.
+    pub scalar_ns: f64,
+}
+
+impl Probes {
+    /// Every probe as (name, value, unit), with the value oriented so that larger is slower
+    /// (bandwidth inverted to ns per byte ×10⁹ would hide the figure, so it is kept as GB/s and
+    /// marked by its unit).
+    pub fn entries(&self) -> [(&'static str, f64, &'static str); 6] {
+        [
+            ("load latency 1 MiB", self.latency_ns_1mib, "ns"),
+            ("load latency 8 MiB", self.latency_ns_8mib, "ns"),
+            ("load latency 64 MiB", self.latency_ns_64mib, "ns"),
+            ("read bandwidth", self.read_gb_s, "GB/s"),
+            ("page fault", self.page_fault_ns, "ns/page"),
+            ("scalar loop", self.scalar_ns, "ns/iter"),
+        ]
+    }
+
+    /// The probes on which `self` and `other` differ by more than the factor `1 + tolerance`
+    /// either way, described as "load latency 64 MiB 173.0 ns vs 61.2 ns (2.83×)".
+    pub fn differences(&self, other: &Probes, tolerance: f64) -> Vec<String> {
+        self.entries()
+            .iter()
+            .zip(other.entries())
+            .filter_map(|(&(name, a, unit), (_, b, _))| {
+                let ratio = a / b;
+                let within = ratio.is_finite() && ratio > 0.0 && ratio.max(1.0 / ratio) <= 1.0 + tolerance;
+                (!within).then(|| format!("{name} {a:.1} {unit} vs {b:.1} {unit} ({ratio:.2}×)"))
+            })
+            .collect()
+    }
+
+    /// One line for reports: "load latency 1 MiB 2.1 ns · … · scalar loop 1.3 ns/iter".
+    pub fn describe(&self) -> String {
+        let parts: Vec<String> = self.entries().iter().map(|(n, v, u)| format!("{n} {v:.1} {u}")).collect();
+        parts.join(" · ")
+    }
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

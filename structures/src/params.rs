@@ -38,6 +38,19 @@ impl Params {
         }
     }
 
+    /// The value of `key` as one of the named `options` (`default` when absent); anything else is
+    /// an error listing the options.
+    pub fn choice<T: Copy>(&self, key: &str, default: T, options: &[(&str, T)]) -> Result<T, BuildError> {
+        let Some(raw) = self.values.get(key) else { return Ok(default) };
+        options.iter().find(|(name, _)| name == raw).map(|&(_, v)| v).ok_or_else(|| BuildError::BadParam {
+            key: key.into(),
+            detail: format!(
+                "'{raw}' is not one of {}",
+                options.iter().map(|(name, _)| *name).collect::<Vec<_>>().join(", ")
+            ),
+        })
+    }
+
     /// A copy with `key` set to `value` (a sweep over one parameter).
     pub fn with(&self, key: &str, value: impl ToString) -> Self {
         let mut values = self.values.clone();

@@ -8,14 +8,23 @@
 //!   baseline wants refreshing), and a changed hit fraction or triangle count is a regression
 //!   either way (the picture or the scene changed).
 //! - **Timings** — never compared raw when avoidable, because a loaded machine slows everything.
-//!   A case's best (min-of-reps) time is divided by the reference BVH's best time measured in the
-//!   same run — preferably the reference reps timed in alternation with the case's own
-//!   ([`RenderStats::reference_timing`]), else the `bvh` case of the same scene — and that ratio is
-//!   compared between the runs. Per case the threshold is `render` / `build`; per structure the
-//!   geometric mean of the ratio changes over every scene (`render_geomean` / `build_geomean`)
-//!   averages the noise of single cases away. Where either run lacks a reference the raw times are
-//!   compared under the wider `render_raw` / `build_raw`, and the table says so. Times under
+//!   A case's time is divided by the reference BVH's measured in the same run. With the reference
+//!   reps timed in alternation with the case's own ([`RenderStats::reference_timing`]), each rep
+//!   gives a paired ratio; the case's ratio is their median, and the decision is statistical: a
+//!   bootstrap of the median ratio's change (NEW over BASE, 2000 resamples, 95 % interval) must
+//!   lie wholly beyond the threshold for a regression (or an improvement), so one disturbed rep
+//!   cannot fail a case. Without paired samples the best (min-of-reps) times' ratio is compared
+//!   as a point. Per case the threshold is `render` / `build`; per structure the geometric mean of
+//!   the ratio changes over every scene (`render_geomean` / `build_geomean`) averages the noise of
+//!   single cases away and catches a slowdown of a whole structure. Where either run lacks a
+//!   reference the raw times are compared under the wider `render_raw` / `build_raw`. Times under
 //!   `timing_floor_ms` are shown but never gated: scheduler noise dominates them.
+//!
+//! **Across machines** timing ratios are not comparable (a different memory system slows an
+//! allocation-heavy build far more than the BVH it is divided by), so timings are gated only when
+//! both runs carry machine probes ([`crate::schema::Probes`]) that agree within
+//! `probe_tolerance`; otherwise every timing row is information, the comparison says why, and
+//! deterministic metrics are gated as always ([`TimingGate`] overrides this).
 //!
 //! A case in BASE but not in NEW fails the comparison; a case only in NEW is reported.
 
@@ -94,15 +103,72 @@ pub struct Comparison {
     pub rows: Vec<Row>,
     /// Differences in how the runs were configured that make deltas suspect.
     pub warnings: Vec<String>,
+    /// Whether timing rows were gated, and why (or why not).
+    pub timing_gated: bool,
+    pub timing_reason: String,
 }
 
-/// Compares every case of `base` with the same case of `new`.
+/// When timing ratios are gated (`harness compare --timing-gate`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimingGate {
+    /// When both runs' machine probes agree within `probe_tolerance`.
+    #[default]
+    Auto,
+    /// Always (the user vouches that the machines are comparable).
+    Always,
+    /// Never: deterministic metrics only.
+    Never,
+}
+
+/// Compares every case of `base` with the same case of `new`, gating timings when the machines'
+/// probes agree.
 pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Comparison {
+    compare_with(new, base, thresholds, TimingGate::Auto)
+}
+
+/// Whether timings can be gated between the two runs' machines, and why.
+pub fn timing_gate(new: &Results, base: &Results, thresholds: &Thresholds, gate: TimingGate) -> (bool, String) {
+    let tolerance = thresholds.get("probe_tolerance");
+    match gate {
+        TimingGate::Always => (true, "timings gated: --timing-gate always".into()),
+        TimingGate::Never => (false, "timings not gated: --timing-gate never".into()),
+        TimingGate::Auto => match (&new.machine.probes, &base.machine.probes) {
+            (Some(n), Some(b)) => {
+                let differ = n.differences(b, tolerance);
+                if differ.is_empty() {
+                    (true, format!("timings gated: every machine probe agrees within {:.0} %", tolerance * 100.0))
+                } else {
+                    (
+                        false,
+                        format!(
+                            "timings not gated: the machines differ (NEW vs BASE: {}; tolerance {:.0} %), so timing \
+                             ratios are not comparable; re-measure the baseline on this machine to gate them",
+                            differ.join("; "),
+                            tolerance * 100.0
+                        ),
+                    )
+                }
+            }
+            _ => (
+                false,
+                "timings not gated: a run has no machine probes (recorded before they existed or merged), so \
+                 whether its machine is comparable is unknown"
+                    .into(),
+            ),
+        },
+    }
+}
+
+/// [`compare`] with an explicit [`TimingGate`].
+pub fn compare_with(new: &Results, base: &Results, thresholds: &Thresholds, gate: TimingGate) -> Comparison {
+    let (timing_gated, timing_reason) = timing_gate(new, base, thresholds, gate);
     let mut cmp = Comparison {
         new_run: new.run_id.clone(),
         base_run: base.run_id.clone(),
         rows: Vec::new(),
         warnings: settings_warnings(new, base),
+        timing_gated,
+        timing_reason,
     };
     let mut geo: BTreeMap<(String, String, &'static str), Vec<f64>> = BTreeMap::new();
     for b in &base.cases {
@@ -110,7 +176,7 @@ pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Compar
             cmp.rows.push(presence_row(b, "", Status::Missing, "case not in NEW"));
             continue;
         };
-        compare_case(&mut cmp.rows, &mut geo, (n, new), (b, base), thresholds);
+        compare_case(&mut cmp.rows, &mut geo, (n, new), (b, base), thresholds, timing_gated);
     }
     for n in new.cases.iter().filter(|n| !base.cases.iter().any(|b| same_case(n, b))) {
         cmp.rows.push(presence_row(n, "", Status::New, "case not in BASE"));
@@ -121,6 +187,8 @@ pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Compar
         }
         let change = (logs.iter().sum::<f64>() / logs.len() as f64).exp() - 1.0;
         let threshold = thresholds.get(metric);
+        let status = if timing_gated { judge_timing(change, change, threshold) } else { Status::Info };
+        let note = if timing_gated { "" } else { "; not gated: the machines differ" };
         cmp.rows.push(Row {
             scene: format!("all {} scenes", logs.len()),
             structure,
@@ -130,8 +198,8 @@ pub fn compare(new: &Results, base: &Results, thresholds: &Thresholds) -> Compar
             new: None,
             change: Some(change),
             threshold: Some(threshold),
-            status: judge_timing(change, threshold),
-            note: "geometric mean of the per-scene ratio changes".into(),
+            status,
+            note: format!("geometric mean of the per-scene ratio changes{note}"),
         });
     }
     cmp
@@ -201,7 +269,14 @@ fn settings_warnings(new: &Results, base: &Results) -> Vec<String> {
 
 type Geo = BTreeMap<(String, String, &'static str), Vec<f64>>;
 
-fn compare_case(rows: &mut Vec<Row>, geo: &mut Geo, new: (&Case, &Results), base: (&Case, &Results), th: &Thresholds) {
+fn compare_case(
+    rows: &mut Vec<Row>,
+    geo: &mut Geo,
+    new: (&Case, &Results),
+    base: (&Case, &Results),
+    th: &Thresholds,
+    gated: bool,
+) {
     let ((n, new_run), (b, base_run)) = (new, base);
     let mut det = |metric: &str, name: String, render: String, nv: f64, bv: f64| {
         rows.push(deterministic_row(b, render, metric, name, nv, bv, th));
@@ -218,7 +293,7 @@ fn compare_case(rows: &mut Vec<Row>, geo: &mut Geo, new: (&Case, &Results), base
         let reference = reference_case(run, c).map(|r| &r.build.timing);
         TimingSide::of(&c.build.timing, c.build.reference_timing.as_ref(), reference, c.structure == REFERENCE)
     };
-    rows.push(timing_row(geo, b, String::new(), "build", build(n, new_run), build(b, base_run), th));
+    rows.push(timing_row(geo, b, String::new(), "build", build(n, new_run), build(b, base_run), th, gated));
 
     for br in &b.render {
         let name = render_name(br);
@@ -243,7 +318,7 @@ fn compare_case(rows: &mut Vec<Row>, geo: &mut Geo, new: (&Case, &Results), base
                 .map(|x| &x.timing);
             TimingSide::of(&r.timing, r.reference_timing.as_ref(), reference, c.structure == REFERENCE)
         };
-        rows.push(timing_row(geo, b, name.clone(), "render", side(n, nr, new_run), side(b, br, base_run), th));
+        rows.push(timing_row(geo, b, name.clone(), "render", side(n, nr, new_run), side(b, br, base_run), th, gated));
     }
     for nr in
         n.render.iter().filter(|nr| !b.render.iter().any(|br| br.backend == nr.backend && br.workload == nr.workload))
@@ -304,11 +379,14 @@ fn deterministic_row(
     }
 }
 
-/// One run's view of a case's timing: its best time and, where there is one, the reference's.
+/// One run's view of a case's timing: its best time and, where there is one, the reference's,
+/// and the per-rep ratios to the reference reps timed alongside.
 struct TimingSide {
     ms_min: f64,
     /// The reference's best time and whether it was timed in alternation with the case.
     reference: Option<(f64, bool)>,
+    /// `own[i] / reference[i]` for every rep, when both were recorded rep by rep.
+    paired: Vec<f64>,
     is_reference: bool,
 }
 
@@ -319,7 +397,13 @@ impl TimingSide {
             (None, Some(r)) if !is_reference => Some((r.ms_min, false)),
             _ => None,
         };
-        Self { ms_min: own.ms_min, reference, is_reference }
+        let ratios = match paired {
+            Some(p) if p.samples_ms.len() == own.samples_ms.len() && own.samples_ms.len() >= 2 => {
+                own.samples_ms.iter().zip(&p.samples_ms).filter(|(_, r)| **r > 0.0).map(|(o, r)| o / r).collect()
+            }
+            _ => Vec::new(),
+        };
+        Self { ms_min: own.ms_min, reference, paired: ratios, is_reference }
     }
 
     fn shortest_ms(&self) -> f64 {
@@ -327,18 +411,62 @@ impl TimingSide {
     }
 }
 
-fn judge_timing(change: f64, threshold: f64) -> Status {
-    if change > threshold {
+/// Judges a timing change from its confidence interval `[lo, hi]` (a point: `lo == hi`): a
+/// regression when even `lo` is beyond the threshold, an improvement when even `hi` is.
+fn judge_timing(lo: f64, hi: f64, threshold: f64) -> Status {
+    if lo > threshold {
         Status::Regression
-    } else if 1.0 / (1.0 + change) - 1.0 > threshold {
+    } else if 1.0 / (1.0 + hi) - 1.0 > threshold {
         Status::Improved
     } else {
         Status::Ok
     }
 }
 
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
+}
+
+/// Bootstrap resamples of [`bootstrap_change`].
+const RESAMPLES: usize = 2000;
+
+/// The 95 % bootstrap interval of `median(new) / median(base) − 1`, resampling each side's
+/// per-rep ratios with replacement; deterministic (the generator is seeded from `seed`).
+fn bootstrap_change(new: &[f64], base: &[f64], seed: u64) -> (f64, f64) {
+    let mut state = seed | 1;
+    let mut next = |n: usize| {
+        // xorshift64*
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 33) as usize % n
+    };
+    let mut a = vec![0.0; new.len()];
+    let mut b = vec![0.0; base.len()];
+    let mut changes: Vec<f64> = (0..RESAMPLES)
+        .map(|_| {
+            a.iter_mut().for_each(|x| *x = new[next(new.len())]);
+            b.iter_mut().for_each(|x| *x = base[next(base.len())]);
+            median(&mut a) / median(&mut b) - 1.0
+        })
+        .collect();
+    changes.sort_by(f64::total_cmp);
+    (changes[RESAMPLES * 25 / 1000], changes[RESAMPLES * 975 / 1000 - 1])
+}
+
+/// A stable seed from a row's identity, so reruns of `compare` give the same intervals.
+fn seed_of(parts: &[&str]) -> u64 {
+    parts
+        .iter()
+        .flat_map(|p| p.bytes().chain([0]))
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
 /// Compares one timing (`kind` is `build` or `render`) as a ratio to the reference where both runs
 /// have one, else raw.
+#[allow(clippy::too_many_arguments)] // one row's identity, both sides and how to judge them
 fn timing_row(
     geo: &mut Geo,
     c: &Case,
@@ -347,6 +475,7 @@ fn timing_row(
     new: TimingSide,
     base: TimingSide,
     th: &Thresholds,
+    gated: bool,
 ) -> Row {
     let floor = th.floor_ms();
     let mut row = Row {
@@ -361,7 +490,21 @@ fn timing_row(
         status: Status::Ok,
         note: String::new(),
     };
+    // The change's confidence interval: from the paired per-rep ratios where both runs have them.
+    let mut interval: Option<(f64, f64)> = None;
     let (metric, nv, bv, note): (&'static str, f64, f64, String) = match (new.reference, base.reference) {
+        (Some(_), Some(_)) if !new.paired.is_empty() && !base.paired.is_empty() => {
+            let (nv, bv) = (median(&mut new.paired.clone()), median(&mut base.paired.clone()));
+            let (lo, hi) =
+                bootstrap_change(&new.paired, &base.paired, seed_of(&[&c.scene, &case_name(c), &row.render, kind]));
+            interval = Some((lo, hi));
+            let basis = format!(
+                "median of per-rep ratios to bvh timed alongside; 95 % interval {}…{}",
+                table::fmt_change(lo),
+                table::fmt_change(hi)
+            );
+            (metric_name(kind, false), nv, bv, basis)
+        }
         (Some((nr, np)), Some((br, bp))) => {
             let basis = match (np, bp) {
                 (true, true) => "ratio to bvh timed alongside (min of reps)",
@@ -393,8 +536,9 @@ fn timing_row(
         row.status = Status::Info;
         row.note = format!("{note}; under the {floor} ms timing floor, not gated");
     } else {
-        row.status = judge_timing(change, threshold);
-        row.note = note;
+        let (lo, hi) = interval.unwrap_or((change, change));
+        row.status = if gated { judge_timing(lo, hi, threshold) } else { Status::Info };
+        row.note = if gated { note } else { format!("{note}; not gated: the machines differ") };
         if metric == kind && change.is_finite() && change > -1.0 {
             let key =
                 (case_name(c), row.render.clone(), if kind == "build" { "build_geomean" } else { "render_geomean" });
@@ -426,9 +570,30 @@ mod tests {
 
     #[test]
     fn timing_judgement_is_symmetric_in_ratio() {
-        assert_eq!(judge_timing(0.1, 0.15), Status::Ok);
-        assert_eq!(judge_timing(0.2, 0.15), Status::Regression);
-        assert_eq!(judge_timing(-0.1, 0.15), Status::Ok, "1/0.9 = +11 %");
-        assert_eq!(judge_timing(-0.2, 0.15), Status::Improved, "1/0.8 = +25 %");
+        let point = |c: f64| judge_timing(c, c, 0.15);
+        assert_eq!(point(0.1), Status::Ok);
+        assert_eq!(point(0.2), Status::Regression);
+        assert_eq!(point(-0.1), Status::Ok, "1/0.9 = +11 %");
+        assert_eq!(point(-0.2), Status::Improved, "1/0.8 = +25 %");
+        // An interval must lie wholly beyond the threshold.
+        assert_eq!(judge_timing(0.1, 0.4, 0.15), Status::Ok);
+        assert_eq!(judge_timing(-0.3, -0.1, 0.15), Status::Ok);
+        assert_eq!(judge_timing(0.16, 0.4, 0.15), Status::Regression);
+    }
+
+    #[test]
+    fn bootstrap_interval_covers_the_change_and_is_deterministic() {
+        let base = [1.00, 1.02, 0.98, 1.01, 0.99];
+        let same = [1.01, 0.99, 1.00, 1.03, 0.98];
+        let slow: Vec<f64> = base.iter().map(|x| x * 1.5).collect();
+        let (lo, hi) = bootstrap_change(&same, &base, 7);
+        assert!(lo < 0.0 && hi > 0.0 && hi - lo < 0.1, "{lo} {hi}");
+        let (lo, hi) = bootstrap_change(&slow, &base, 7);
+        assert!(lo > 0.4 && hi < 0.6, "{lo} {hi}");
+        assert_eq!(bootstrap_change(&slow, &base, 7), (lo, hi));
+        // One disturbed rep moves the median little.
+        let outlier = [1.01, 0.99, 3.0, 1.03, 0.98];
+        let (lo, _) = bootstrap_change(&outlier, &base, 7);
+        assert!(lo < 0.1, "{lo}");
     }
 }

@@ -78,21 +78,24 @@ impl Comparison {
             count(Status::New),
             count(Status::Info)
         );
+        let _ = writeln!(out, "{}", self.timing_reason);
         for metric in ["render", "build", "render_geomean", "build_geomean"] {
+            // Not gated, the timing rows are all information: still show the worst of them.
             let worst = self
                 .rows
                 .iter()
-                .filter(|r| r.metric == metric && r.status != Status::Info)
+                .filter(|r| r.metric == metric && (r.status != Status::Info || !self.timing_gated))
                 .filter_map(|r| Some((r.change?, r)))
                 .max_by(|a, b| a.0.total_cmp(&b.0));
             if let Some((change, r)) = worst {
                 let what = [r.scene.as_str(), &r.structure, &r.render].into_iter().filter(|s| !s.is_empty());
                 let _ = writeln!(
                     out,
-                    "worst {metric} change: {} ({}; threshold {})",
+                    "worst {metric} change: {} ({}; threshold {}{})",
                     fmt_change(change),
                     what.collect::<Vec<_>>().join(" "),
-                    r.threshold.map_or("—".into(), fmt_threshold)
+                    r.threshold.map_or("—".into(), fmt_threshold),
+                    if self.timing_gated { "" } else { ", information only" }
                 );
             }
         }
@@ -122,7 +125,7 @@ fn fmt_threshold(t: f64) -> String {
     }
 }
 
-fn fmt_change(c: f64) -> String {
+pub(super) fn fmt_change(c: f64) -> String {
     if c.is_infinite() {
         return if c > 0.0 { "+∞".into() } else { "−∞".into() };
     }

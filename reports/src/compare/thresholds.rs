@@ -29,13 +29,21 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     ("hit_fraction", Kind::Exact, 1e-6),
     ("hit_mismatches", Kind::Count, 0.0),
     ("prim_mismatches", Kind::Count, 0.0),
-    ("render", Kind::Timing, 0.15),
-    ("build", Kind::Timing, 0.15),
+    // Per case, judged on the 95 % interval of the change (README "Regression gate"): unchanged
+    // reruns on a shared 2-core VM moved single render ratios by up to 25 % and build ratios by up
+    // to 62 % (allocation-heavy builds are bimodal), so a single case fails when its render surely
+    // slowed by over 35 % or its build surely doubled.
+    ("render", Kind::Timing, 0.35),
+    ("build", Kind::Timing, 1.0),
+    // Per structure over all scenes: unchanged reruns stayed within 5 %.
     ("render_geomean", Kind::Timing, 0.15),
     ("build_geomean", Kind::Timing, 0.15),
     ("render_raw", Kind::Timing, 0.5),
     ("build_raw", Kind::Timing, 0.5),
     ("timing_floor_ms", Kind::Setting, 1.0),
+    // Machines whose probes all agree within this factor (1 + x) either way count as comparable,
+    // and only then are timings gated.
+    ("probe_tolerance", Kind::Setting, 0.25),
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -113,7 +121,7 @@ mod tests {
     #[test]
     fn thresholds_parse_from_assignments_and_toml() {
         let mut th = Thresholds::default();
-        assert_eq!(th.get("render"), 0.15);
+        assert_eq!(th.get("render"), 0.35);
         th.apply_assignment("render=0.3").unwrap();
         assert_eq!(th.get("render"), 0.3);
         th.apply_toml("build = 0.4\nsteps_per_ray = 0\ntiming_floor_ms = 2").unwrap();

@@ -129,6 +129,9 @@ fn run_section(out: &mut String, r: &Results) {
             esc(&m.os),
             esc(&m.arch)
         );
+        if let Some(p) = &m.probes {
+            let _ = writeln!(out, "<li><b>probes</b>{who} {}</li>", esc(&p.describe()));
+        }
         let g = &view.git;
         let dirty = if g.dirty { " (uncommitted changes)" } else { "" };
         let _ = writeln!(out, "<li><b>git</b><code>{}</code>{dirty}</li>", esc(&g.commit));

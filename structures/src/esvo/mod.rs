@@ -79,16 +79,11 @@ fn on_off(params: &crate::Params, key: &str, default: bool) -> Result<bool, Buil
 impl EsvoParams {
     pub fn from_params(params: &crate::Params) -> Result<Self, BuildError> {
         let d = Self::default();
-        let attributes = match params.get("esvo.attributes", "compressed".to_string())?.as_str() {
-            "raw" => Attributes::Raw,
-            "compressed" => Attributes::Compressed,
-            other => {
-                return Err(BuildError::BadParam {
-                    key: "esvo.attributes".into(),
-                    detail: format!("'{other}' is not raw or compressed"),
-                });
-            }
-        };
+        let attributes = params.choice(
+            "esvo.attributes",
+            Attributes::Compressed,
+            &[("raw", Attributes::Raw), ("compressed", Attributes::Compressed)],
+        )?;
         let beam_block = params.get("esvo.beam_block", d.beam_block)?;
         if !(2..=32).contains(&beam_block) {
             return Err(BuildError::BadParam { key: "esvo.beam_block".into(), detail: "must be 2..=32 pixels".into() });

@@ -56,26 +56,10 @@ pub const MAX_SVDAG_LEVEL: u32 = voxel::MAX_VOXELIZE_LEVEL;
 
 impl SvdagParams {
     pub fn from_params(params: &crate::Params) -> Result<Self, BuildError> {
-        let leaves = match params.get("svdag.leaves", "bricks".to_string())?.as_str() {
-            "bits" => Leaves::Bits,
-            "bricks" => Leaves::Bricks,
-            other => {
-                return Err(BuildError::BadParam {
-                    key: "svdag.leaves".into(),
-                    detail: format!("'{other}' is not bits (1-bit voxels under 8-bit masks) or bricks (4×4×4, 64-bit)"),
-                });
-            }
-        };
-        let source = match params.get("svdag.build", "stream".to_string())?.as_str() {
-            "stream" => Source::Stream,
-            "octree" => Source::Octree,
-            other => {
-                return Err(BuildError::BadParam {
-                    key: "svdag.build".into(),
-                    detail: format!("'{other}' is not stream (sub-DAGs from the voxeliser) or octree (SVO first)"),
-                });
-            }
-        };
+        let leaves =
+            params.choice("svdag.leaves", Leaves::Bricks, &[("bricks", Leaves::Bricks), ("bits", Leaves::Bits)])?;
+        let source =
+            params.choice("svdag.build", Source::Stream, &[("stream", Source::Stream), ("octree", Source::Octree)])?;
         let level = params.get("voxel.levels", 10u32)?;
         let min = leaves.min_level();
         if !(min..=MAX_SVDAG_LEVEL).contains(&level) {
