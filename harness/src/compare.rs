@@ -29,7 +29,6 @@ pub fn compare(args: &CompareArgs) -> Result<bool> {
     for w in &cmp.warnings {
         println!("warning: {w}");
     }
-    println!("{}", cmp.timing_reason);
     let table = cmp.table(args.all);
     if table.is_empty() {
         println!("every compared metric is within its threshold (--all lists them)");

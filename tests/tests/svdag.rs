@@ -110,6 +110,33 @@ fn random_rays_and_point_queries_at_level_12() {
     }
 }
 
+/// Distinct subtrees per level by brute force — a level-`l` node is the set of its voxels relative
+/// to its corner — from the voxelisation's codes alone.
+fn distinct_subtrees(codes: &[u64], level: u32, bottom: u32) -> Vec<u64> {
+    (0..=bottom)
+        .map(|l| {
+            let shift = 3 * (level - l);
+            let mut seen = std::collections::HashSet::new();
+            for group in codes.chunk_by(|a, b| a >> shift == b >> shift) {
+                seen.insert(group.iter().map(|c| c & ((1u64 << shift) - 1)).collect::<Vec<_>>());
+            }
+            seen.len() as u64
+        })
+        .collect()
+}
+
+#[test]
+fn node_counts_are_the_minimal_dags_on_scenes() {
+    for (name, level) in [("bunny", 7), ("menger", 7), ("city", 6), ("mandelbulb", 6)] {
+        let scene = load(name);
+        let (set, _) = voxelize_all(&scene, &VoxelGrid::fit(scene.bounds(), level));
+        for (leaves, bottom) in [("bits", level - 1), ("bricks", level - 2)] {
+            let dag = svdag(&scene, level, &[&format!("svdag.leaves={leaves}")]);
+            assert_eq!(dag.stats.nodes_per_level, distinct_subtrees(&set.codes, level, bottom), "{name} {leaves}");
+        }
+    }
+}
+
 #[test]
 fn merging_is_canonical() {
     for (name, level) in [("bunny", 10), ("menger", 9), ("dragon-11k", 10), ("room", 9)] {

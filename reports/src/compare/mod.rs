@@ -22,7 +22,7 @@
 //!
 //! **Across machines** timing ratios are not comparable (a different memory system slows an
 //! allocation-heavy build far more than the BVH it is divided by), so timings are gated only when
-//! both runs carry machine probes ([`crate::schema::Probes`]) that agree within
+//! both runs carry machine probes ([`crate::schema::Probes::comparable`]) that agree within
 //! `probe_tolerance`; otherwise every timing row is information, the comparison says why, and
 //! deterministic metrics are gated as always ([`TimingGate`] overrides this).
 //!
@@ -133,22 +133,19 @@ pub fn timing_gate(new: &Results, base: &Results, thresholds: &Thresholds, gate:
         TimingGate::Always => (true, "timings gated: --timing-gate always".into()),
         TimingGate::Never => (false, "timings not gated: --timing-gate never".into()),
         TimingGate::Auto => match (&new.machine.probes, &base.machine.probes) {
-            (Some(n), Some(b)) => {
-                let differ = n.differences(b, tolerance);
-                if differ.is_empty() {
-                    (true, format!("timings gated: every machine probe agrees within {:.0} %", tolerance * 100.0))
-                } else {
-                    (
-                        false,
-                        format!(
-                            "timings not gated: the machines differ (NEW vs BASE: {}; tolerance {:.0} %), so timing \
-                             ratios are not comparable; re-measure the baseline on this machine to gate them",
-                            differ.join("; "),
-                            tolerance * 100.0
-                        ),
-                    )
-                }
-            }
+            (Some(n), Some(b)) => match n.comparable(b, tolerance) {
+                Ok(how) => (true, format!("timings gated: the machines' probes agree (NEW/BASE: {how})")),
+                Err(how) => (
+                    false,
+                    format!(
+                        "timings not gated: the machines differ (NEW/BASE probes: {how}; comparable within a \
+                         typical {:.2}× and {:.2}× at most), so timing ratios are not comparable; record a \
+                         baseline on this machine to gate them",
+                        1.0 + tolerance,
+                        1.0 + 2.0 * tolerance
+                    ),
+                ),
+            },
             _ => (
                 false,
                 "timings not gated: a run has no machine probes (recorded before they existed or merged), so \

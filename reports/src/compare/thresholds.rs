@@ -41,9 +41,10 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     ("render_raw", Kind::Timing, 0.5),
     ("build_raw", Kind::Timing, 0.5),
     ("timing_floor_ms", Kind::Setting, 1.0),
-    // Machines whose probes all agree within this factor (1 + x) either way count as comparable,
-    // and only then are timings gated.
-    ("probe_tolerance", Kind::Setting, 0.25),
+    // Machines whose probes agree within a typical factor 1 + x (and 1 + 2x at most) count as
+    // comparable, and only then are timings gated (Probes::comparable). Six unchanged runs on one
+    // VM stayed within a typical 1.34× (one probe 1.65×, during a neighbour's burst).
+    ("probe_tolerance", Kind::Setting, 0.5),
 ];
 
 #[derive(Debug, thiserror::Error)]
