@@ -88,6 +88,15 @@ fn doubled_memory_or_steps_fail() {
 }
 
 #[test]
+fn another_cpu_model_is_not_timing_gated() {
+    let base = load("base");
+    let mut other = load("rerun-1");
+    other.machine.cpu = "AMD EPYC".into();
+    let c = gate(&other, &base);
+    assert!(!c.timing_gated && c.timing_reason.contains("CPUs differ"), "{}", c.timing_reason);
+}
+
+#[test]
 fn one_disturbed_rep_does_not_fail_a_case() {
     let base = load("base");
     let mut new = load("rerun-3");

@@ -22,7 +22,7 @@
 //!
 //! **Across machines** timing ratios are not comparable (a different memory system slows an
 //! allocation-heavy build far more than the BVH it is divided by), so timings are gated only when
-//! both runs carry machine probes ([`crate::schema::Probes::comparable`]) that agree within
+//! both runs ran on the same CPU model and carry machine probes ([`crate::schema::Probes::comparable`]) that agree within
 //! `probe_tolerance`; otherwise every timing row is information, the comparison says why, and
 //! deterministic metrics are gated as always ([`TimingGate`] overrides this).
 //!
@@ -132,6 +132,14 @@ pub fn timing_gate(new: &Results, base: &Results, thresholds: &Thresholds, gate:
     match gate {
         TimingGate::Always => (true, "timings gated: --timing-gate always".into()),
         TimingGate::Never => (false, "timings not gated: --timing-gate never".into()),
+        TimingGate::Auto if new.machine.cpu != base.machine.cpu => (
+            false,
+            format!(
+                "timings not gated: the CPUs differ ({} vs {}), so timing ratios are not comparable; record a \
+                 baseline on this machine to gate them",
+                new.machine.cpu, base.machine.cpu
+            ),
+        ),
         TimingGate::Auto => match (&new.machine.probes, &base.machine.probes) {
             (Some(n), Some(b)) => match n.comparable(b, tolerance) {
                 Ok(how) => (true, format!("timings gated: the machines' probes agree (NEW/BASE: {how})")),
