@@ -77,7 +77,7 @@ pub enum Preset {
     /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
     /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
     /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;
-    /// with the paper's figures and growth per doubling. Long: about 15 minutes on 2 cores.
+    /// with the paper's figures and growth per doubling. Long: 60 cases, about 10 minutes on 2 cores.
     SvdagTables,
 }
 
