@@ -152,11 +152,6 @@ impl LevelStore {
         &self.words[offset..offset + node_words(self.kind, self.words[offset])]
     }
 
-    /// Bytes held by the words and the hash table (for the build's peak accounting).
-    pub fn heap_bytes(&self) -> u64 {
-        (self.words.capacity() * 4 + self.table.capacity() * 5) as u64
-    }
-
     /// Drops the hash table, keeping the words.
     pub fn release_table(&mut self) {
         self.table = HashTable::new();
