@@ -4,7 +4,10 @@
 //! forced on (`TimingGate::Always`); `tests/gate.rs` covers the gate's decision on recorded runs.
 
 use reports::compare::{Comparison, Status, Thresholds, TimingGate, compare_with};
-use reports::{Results, Timing};
+mod common;
+
+use common::{failing, scale};
+use reports::Results;
 
 fn fixture() -> Results {
     let text = include_str!("fixtures/results.json");
@@ -17,21 +20,6 @@ fn run(new: &Results, base: &Results) -> Comparison {
 
 fn compare(new: &Results, base: &Results, th: &Thresholds) -> Comparison {
     compare_with(new, base, th, TimingGate::Always)
-}
-
-fn failing(c: &Comparison) -> Vec<String> {
-    c.rows
-        .iter()
-        .filter(|r| r.status.fails())
-        .map(|r| format!("{} {} {} {}", r.scene, r.structure, r.render, r.metric))
-        .collect()
-}
-
-fn scale(t: &mut Timing, f: f64) {
-    t.ms_median *= f;
-    t.ms_min *= f;
-    t.ms_max *= f;
-    t.samples_ms.iter_mut().for_each(|s| *s *= f);
 }
 
 /// Scales every timing of the run, the alternately timed reference reps included: a machine

@@ -11,7 +11,10 @@
 //! not failed on timing ratios, and is still failed by a deterministic regression.
 
 use reports::compare::{Comparison, Status, Thresholds, TimingGate, compare, compare_with};
-use reports::{Results, Timing};
+mod common;
+
+use common::{failing, scale};
+use reports::Results;
 
 fn load(name: &str) -> Results {
     let path = format!("{}/tests/fixtures/gate/{name}.json", env!("CARGO_MANIFEST_DIR"));
@@ -21,21 +24,6 @@ fn load(name: &str) -> Results {
 
 fn gate(new: &Results, base: &Results) -> Comparison {
     compare(new, base, &Thresholds::default())
-}
-
-fn failing(c: &Comparison) -> Vec<String> {
-    c.rows
-        .iter()
-        .filter(|r| r.status.fails())
-        .map(|r| format!("{} {} {} {}", r.scene, r.structure, r.render, r.metric))
-        .collect()
-}
-
-fn scale(t: &mut Timing, f: f64) {
-    t.ms_median *= f;
-    t.ms_min *= f;
-    t.ms_max *= f;
-    t.samples_ms.iter_mut().for_each(|s| *s *= f);
 }
 
 #[test]
