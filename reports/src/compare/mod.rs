@@ -193,7 +193,7 @@ pub fn compare_with(new: &Results, base: &Results, thresholds: &Thresholds, gate
         let change = (logs.iter().sum::<f64>() / logs.len() as f64).exp() - 1.0;
         let threshold = thresholds.get(metric);
         let status = if timing_gated { judge_timing(change, change, threshold) } else { Status::Info };
-        let note = if timing_gated { "" } else { "; not gated: the machines differ" };
+        let note = if timing_gated { "" } else { "; not gated (the timing line below says why)" };
         cmp.rows.push(Row {
             scene: format!("all {} scenes", logs.len()),
             structure,
@@ -541,9 +541,10 @@ fn timing_row(
         row.status = Status::Info;
         row.note = format!("{note}; under the {floor} ms timing floor, not gated");
     } else {
-        let (lo, hi) = interval.unwrap_or((change, change));
+        // A degenerate interval (a zero ratio in a resample) falls back to the point change.
+        let (lo, hi) = interval.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()).unwrap_or((change, change));
         row.status = if gated { judge_timing(lo, hi, threshold) } else { Status::Info };
-        row.note = if gated { note } else { format!("{note}; not gated: the machines differ") };
+        row.note = if gated { note } else { format!("{note}; not gated (the timing line below says why)") };
         if metric == kind && change.is_finite() && change > -1.0 {
             let key =
                 (case_name(c), row.render.clone(), if kind == "build" { "build_geomean" } else { "render_geomean" });
