@@ -450,13 +450,7 @@ fn one_line(case: &Case) -> String {
             )
         })
         .collect();
-    let mut structure = match case.resolution {
-        Some(r) => format!("{} {r}³", case.structure),
-        None => case.structure.clone(),
-    };
-    if let Some(v) = &case.variant {
-        structure = format!("{structure} [{v}]");
-    }
+    let structure = case.full_name();
     format!(
         "  {:<12} {:<14} {:>8} tris  build {:>8.1} ms  {:>8.2} MiB  {}",
         case.scene,

@@ -118,10 +118,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     for case in cases {
         let b = &case.build.timing;
-        let mut label = case.label();
-        if let Some(r) = case.resolution {
-            let _ = write!(label, " {r}³");
-        }
+        let label = case.full_name();
         for r in &case.render {
             let t = &r.timing;
             let _ = writeln!(

@@ -66,9 +66,8 @@ pub struct Probes {
 }
 
 impl Probes {
-    /// Every probe as (name, value, unit), with the value oriented so that larger is slower
-    /// (bandwidth inverted to ns per byte ×10⁹ would hide the figure, so it is kept as GB/s and
-    /// marked by its unit).
+    /// Every probe as (name, value, unit). Latencies, page faults and the loop are times (larger
+    /// is slower); the bandwidth is GB/s (larger is faster).
     pub fn entries(&self) -> [(&'static str, f64, &'static str); 6] {
         [
             ("load latency 1 MiB", self.latency_ns_1mib, "ns"),
@@ -189,6 +188,22 @@ impl Case {
         match &self.machine {
             Some(tag) => format!("{label} @ {tag}"),
             None => label,
+        }
+    }
+
+    /// The case's full name in tables, logs and compare rows: structure, resolution, variant and
+    /// machine tag, e.g. `svdag 512³ [bits] @ laptop`.
+    pub fn full_name(&self) -> String {
+        let mut name = self.structure.clone();
+        if let Some(r) = self.resolution {
+            name = format!("{name} {r}³");
+        }
+        if let Some(v) = &self.variant {
+            name = format!("{name} [{v}]");
+        }
+        match &self.machine {
+            Some(tag) => format!("{name} @ {tag}"),
+            None => name,
         }
     }
 }

@@ -64,7 +64,7 @@ fn find<'a>(results: &'a Results, scene: &str, structure: &str, level: u32, vari
         c.scene == scene
             && c.structure == structure
             && c.resolution == Some(1u64 << level)
-            && (structure != "svdag" || c.variant.as_deref() == variant || variant.is_none())
+            && variant.is_none_or(|v| c.variant.as_deref() == Some(v))
     })
 }
 

@@ -1,6 +1,7 @@
-//! GPU bindings of the voxel structures (`svo-naive`, `svo`, `esvo`, `svdag`): each is one WGSL file over
-//! the shared ray set-up (`octree_ray.wgsl`) and, for `svo` and `esvo`, the shared Laine–Karras
-//! caster (`octree_cast.wgsl`) for `svo`, `esvo` and `svdag`, plus the few words below that describe its buffers.
+//! GPU bindings of the voxel structures (`svo-naive`, `svo`, `esvo`, `svdag`): each is one WGSL
+//! file over the shared ray set-up (`octree_ray.wgsl`) and, for `svo`, `esvo` and `svdag`, the
+//! shared Laine–Karras caster (`octree_cast.wgsl`), plus the few words below that describe its
+//! buffers.
 //!
 //! Every kernel's `params` buffer starts with the voxel grid: origin (3 × f32 bits), `1 / size`
 //! (f32 bits, computed here exactly as `VoxelGrid::to_octree_space` computes it, so GPU and CPU

@@ -29,7 +29,6 @@
 //! A case in BASE but not in NEW fails the comparison; a case only in NEW is reported.
 
 use std::collections::BTreeMap;
-use std::fmt::Write;
 
 use crate::schema::{Case, RenderStats, Results, Timing};
 
@@ -219,17 +218,7 @@ fn same_case(a: &Case, b: &Case) -> bool {
 }
 
 fn case_name(c: &Case) -> String {
-    let mut name = c.structure.clone();
-    if let Some(r) = c.resolution {
-        let _ = write!(name, " {r}³");
-    }
-    if let Some(v) = &c.variant {
-        let _ = write!(name, " [{v}]");
-    }
-    if let Some(tag) = &c.machine {
-        let _ = write!(name, " @ {tag}");
-    }
-    name
+    c.full_name()
 }
 
 fn render_name(r: &RenderStats) -> String {

@@ -336,10 +336,7 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
     );
     for case in cases {
         let b = &case.build.timing;
-        let mut label = esc(&case.label());
-        if let Some(r) = case.resolution {
-            let _ = write!(label, " {r}³");
-        }
+        let label = esc(&case.full_name());
         for r in &case.render {
             let t = &r.timing;
             let _ = writeln!(

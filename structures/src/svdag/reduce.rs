@@ -127,9 +127,10 @@ impl LevelStore {
         // At most every run's unique nodes are new here: reserve for them, so neither the table
         // nor the words grow (and rehash or copy) while merging.
         let (nodes, words) = local.iter().fold((0, 0), |(n, w), (s, _)| (n + s.unique as usize, w + s.words.len()));
-        let kind_words = &self.words;
-        self.table
-            .reserve(nodes, |&o| hash(&kind_words[o as usize..o as usize + node_words(kind, kind_words[o as usize])]));
+        let level_words = &self.words;
+        self.table.reserve(nodes, |&o| {
+            hash(&level_words[o as usize..o as usize + node_words(kind, level_words[o as usize])])
+        });
         self.words.reserve(words);
         let mut out = Vec::with_capacity(n);
         for (store, offsets) in local {
