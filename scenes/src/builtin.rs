@@ -59,12 +59,7 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
 /// to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
 /// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
 pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
-    // Only `@sub<k>` is a modifier; any other `@` belongs to the name (a file path may hold one).
-    let modifier = name.rsplit_once('@').and_then(|(base, m)| {
-        let k = m.strip_prefix("sub")?.parse::<u32>().ok().filter(|&k| k <= 6)?;
-        Some((base, k))
-    });
-    if let Some((base, levels)) = modifier {
+    if let Some((base, levels)) = subdivision(name) {
         let mut scene = load_scene(base)?;
         scene.mesh = crate::subdivide::subdivide(&scene.mesh, levels);
         scene.provenance = scene.mesh.provenance.clone();
@@ -77,6 +72,24 @@ pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
         return Ok(scene);
     }
     load_unmodified(name)
+}
+
+/// `base@sub<k>` → (`base`, k). Only `@sub<k>` (k ≤ 6) is a modifier; any other `@` belongs to
+/// the name (a file path may hold one).
+pub fn subdivision(name: &str) -> Option<(&str, u32)> {
+    name.rsplit_once('@').and_then(|(base, m)| {
+        let k = m.strip_prefix("sub")?.parse::<u32>().ok().filter(|&k| k <= 6)?;
+        Some((base, k))
+    })
+}
+
+/// The triangle count of a scene whose name says it before anything is generated: `grass-<N>`,
+/// and `@sub<k>` of such a scene (4^k times as many); `None` for every other scene.
+pub fn estimated_triangles(name: &str) -> Option<u64> {
+    if let Some((base, k)) = subdivision(name) {
+        return estimated_triangles(base).map(|n| n.saturating_mul(4u64.pow(k)));
+    }
+    name.strip_prefix("grass-").and_then(parse_count).map(|n| n as u64)
 }
 
 fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
@@ -121,7 +134,7 @@ fn parse_count(s: &str) -> Option<usize> {
         b'm' => (&lower[..lower.len() - 1], 1_000_000),
         _ => (&lower[..], 1),
     };
-    digits.parse::<usize>().ok().map(|n| n * scale).filter(|&n| n > 0)
+    digits.parse::<usize>().ok().and_then(|n| n.checked_mul(scale)).filter(|&n| n > 0)
 }
 
 #[cfg(test)]

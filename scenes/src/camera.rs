@@ -19,7 +19,9 @@ impl CameraSpec {
     /// The canonical camera for a mesh without its own (DESIGN.md §3): bounding-box centre `c`,
     /// diagonal `d`; eye = `c + d·(0.55, 0.40, 0.85)`, looking at `c`, up +Y, vertical fov 45°.
     /// Reference numbers elsewhere use exactly this camera.
+    /// A point or microscopic scene is framed as [`Aabb::framed`] says.
     pub fn canonical(bounds: Aabb) -> Self {
+        let bounds = bounds.framed();
         let c = bounds.center();
         let d = bounds.diagonal();
         Self { eye: c + d * Vec3::new(0.55, 0.40, 0.85), target: c, up: Vec3::Y, vfov_deg: 45.0 }

@@ -42,6 +42,13 @@ pub enum SceneError {
     /// A NaN or infinite vertex coordinate.
     #[error("{path}: {location}: non-finite vertex coordinate: {detail}")]
     NonFinite { path: String, location: Location, detail: String },
+    /// A finite coordinate too large for the derived quantities to stay finite (see
+    /// [`crate::geom::MAX_COORDINATE`]).
+    #[error(
+        "{path}: {location}: vertex coordinate beyond ±2^40 (≈1.1e12): {detail}; extents, squared distances \
+         and the triangle test's products would overflow f32, so scale the model down"
+    )]
+    OutOfRange { path: String, location: Location, detail: String },
     /// A triangle refers to a vertex that does not exist.
     #[error("{path}: {location}: vertex index {index} out of range (the mesh has {vertex_count} vertices)")]
     IndexOutOfRange { path: String, location: Location, index: i64, vertex_count: usize },

@@ -27,6 +27,17 @@ pub struct Aabb {
     pub max: Vec3,
 }
 
+/// The largest vertex coordinate magnitude a scene may hold: 2^40 ≈ 1.1e12. Every derived
+/// quantity must stay finite in f32 — extents (≤ 2^41), squared distances in normalisation
+/// (≲ 2^85), and the watertight triangle test's products of three coordinates (≲ 2^126) — and
+/// loaders reject a vertex beyond it rather than let a product overflow somewhere downstream.
+pub const MAX_COORDINATE: f32 = 1_099_511_627_776.0;
+
+/// True when every component lies within ±[`MAX_COORDINATE`] (false for NaN and infinities).
+pub fn coordinate_in_range(p: Vec3) -> bool {
+    p.abs().cmple(Vec3::splat(MAX_COORDINATE)).all()
+}
+
 impl Aabb {
     pub const EMPTY: Aabb = Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
 
@@ -60,6 +71,24 @@ impl Aabb {
 
     pub fn diagonal(&self) -> f32 {
         self.extent().length()
+    }
+
+    /// The box with a well-defined size for framing a camera or fitting a voxel cube: the box
+    /// itself when its largest extent is at least 2^-16 of its largest coordinate magnitude and at
+    /// least 2^-40; otherwise (a scene that is a single point, or a triangle 1e-30 across) the box
+    /// grown about its centre to that size, so eye and target differ in f32 and the voxel cube is
+    /// positive. An empty box frames the unit cube at the origin.
+    pub fn framed(&self) -> Aabb {
+        if self.is_empty() {
+            return Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5));
+        }
+        let magnitude = self.min.abs().max(self.max.abs()).max_element();
+        let floor = (magnitude * (1.0 / 65536.0)).max(1.0 / 1_099_511_627_776.0);
+        if self.extent().max_element() >= floor {
+            return *self;
+        }
+        let half = (Vec3::splat(floor) - self.extent()).max(Vec3::ZERO) * 0.5;
+        Aabb::new(self.min - half, self.max + half)
     }
 
     pub fn contains(&self, p: Vec3) -> bool {

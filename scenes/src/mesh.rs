@@ -105,6 +105,13 @@ impl Mesh {
                 detail: format!("{:?}", self.positions[i]),
             });
         }
+        if let Some(i) = self.positions.iter().position(|&p| !crate::geom::coordinate_in_range(p)) {
+            return Err(SceneError::OutOfRange {
+                path: path.into(),
+                location: Location::Element(format!("mesh '{}' vertex {i}", self.name)),
+                detail: format!("{:?}", self.positions[i]),
+            });
+        }
         let n = self.positions.len();
         for (t, tri) in self.indices.iter().enumerate() {
             if let Some(&bad) = tri.iter().find(|&&i| i as usize >= n) {

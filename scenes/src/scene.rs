@@ -72,7 +72,7 @@ impl Scene {
     /// The point light for shadow rays: the scene's own, or one above and behind the canonical eye.
     pub fn light_position(&self) -> Vec3 {
         self.light.unwrap_or_else(|| {
-            let b = self.bounds();
+            let b = self.bounds().framed();
             b.center() + b.diagonal() * Vec3::new(-0.4, 1.0, 0.6)
         })
     }

@@ -26,6 +26,7 @@ fn location(err: &SceneError) -> Option<&Location> {
         SceneError::Truncated { location, .. }
         | SceneError::Malformed { location, .. }
         | SceneError::NonFinite { location, .. }
+        | SceneError::OutOfRange { location, .. }
         | SceneError::IndexOutOfRange { location, .. }
         | SceneError::Unsupported { location, .. } => Some(location),
         _ => None,
@@ -440,4 +441,83 @@ fn cut_or_corrupted_files_never_panic() {
     for len in 0..text.len() {
         let _ = parse_obj("cut.obj", &text.as_bytes()[..len]);
     }
+}
+
+/// Finite coordinates past ±2^40 would overflow extents and the triangle test's products in f32
+/// downstream (they once panicked the grid builder); denormal ones are fine and load as they are.
+#[test]
+fn coordinates_beyond_the_supported_range_are_refused_at_their_line() {
+    let err = obj_err("v 0 0 0\nv 3e38 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert!(matches!(err, SceneError::OutOfRange { .. }), "{err}");
+    assert_line(&err, 2);
+    assert!(err.to_string().contains("2^40"), "{err}");
+    let edge = scenes::geom::MAX_COORDINATE;
+    assert_eq!(obj(&format!("v {edge} 0 0\nv 0 {edge} 0\nv 0 0 -{edge}\nf 1 2 3\n")).triangle_count(), 1);
+    let denormal = obj("v 0 0 0\nv 1e-40 0 0\nv 0 1e-41 0\nf 1 2 3\n");
+    assert_eq!(denormal.positions[1].x, 1e-40);
+    let (json, bin) = document(&[[0.0, 0.0, 0.0], [2e12, 0.0, 0.0], [0.0, 1.0, 0.0]], &[0, 1, 2]);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(err, SceneError::OutOfRange { .. }) && element(&err).contains("POSITION[1]"), "{err}");
+    // A node transform that carries a valid vertex out of range is blamed on the node.
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json["nodes"][0]["scale"] = json!([1e30, 1.0, 1.0]);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(err, SceneError::OutOfRange { .. }) && element(&err).contains("transform"), "{err}");
+}
+
+/// A glTF buffer URI may name a file in the glTF's folder or below it, never `../`, an absolute
+/// path, or a symlink out of the folder: a scene file must not make the harness read other files.
+#[test]
+fn gltf_buffers_outside_the_files_folder_are_refused() {
+    let root = std::env::temp_dir().join(format!("accel-bench-escape-{}", std::process::id()));
+    let dir = root.join("scene");
+    std::fs::create_dir_all(dir.join("sub")).unwrap_or_else(|e| panic!("{e}"));
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    std::fs::write(root.join("secret.bin"), &bin).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(dir.join("sub").join("ok.bin"), &bin).unwrap_or_else(|e| panic!("{e}"));
+    let secret = root.join("secret.bin").to_string_lossy().into_owned();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(root.join("secret.bin"), dir.join("link.bin")).unwrap_or_else(|e| panic!("{e}"));
+    let load = |uri: &str| {
+        let mut json = json.clone();
+        json["buffers"][0]["uri"] = json!(uri);
+        let path = dir.join("escape.gltf");
+        std::fs::write(&path, serde_json::to_vec(&json).unwrap_or_default()).unwrap_or_else(|e| panic!("{e}"));
+        scenes::load::load_file(&path)
+    };
+    let mut refused = vec!["../secret.bin", "sub/../../secret.bin", "%2E%2E/secret.bin", secret.as_str()];
+    if cfg!(unix) {
+        refused.push("link.bin");
+    }
+    for uri in refused {
+        match load(uri) {
+            Err(SceneError::Unsupported { detail, .. }) => assert!(detail.contains("folder"), "{uri}: {detail}"),
+            other => panic!("{uri}: expected Unsupported, got {:?}", other.map(|s| s.triangle_count())),
+        }
+    }
+    assert_eq!(load("sub/ok.bin").map(|s| s.triangle_count()).unwrap_or_else(|e| panic!("{e}")), 2);
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// Counts in headers far beyond the data: a GLB claiming 4 GiB, an accessor of 2^31 vertices, a
+/// buffer of 2^40 bytes. Each is an error naming the element, found without allocating the count.
+#[test]
+fn huge_counts_in_headers_are_errors_not_allocations() {
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let mut whole = glb(&json, &bin);
+    whole[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert!(matches!(parse_gltf("huge.glb", &whole, None), Err(SceneError::Truncated { .. })));
+    let edits: [fn(&mut Value); 3] = [
+        |j| j["accessors"][0]["count"] = json!(1u64 << 31),
+        |j| j["buffers"][0]["byteLength"] = json!(1u64 << 40),
+        |j| j["bufferViews"][0]["byteLength"] = json!(1u64 << 40),
+    ];
+    for edit in edits {
+        let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+        edit(&mut json);
+        let err = gltf_err(&gltf_text(json, &bin));
+        assert!(!err.to_string().is_empty() && !matches!(err, SceneError::Io { .. }), "{err}");
+    }
+    let err = obj_err(&format!("{SQUARE}f 1 2 99999999999\n"));
+    assert_line(&err, 5);
 }

@@ -193,9 +193,27 @@ fn read_uri(path: &str, element: &str, uri: &str, base_dir: Option<&Path>) -> Re
     }
     let file = percent_decode(uri).ok_or_else(|| malformed(path, element, format!("URI `{uri}` has bad %-escapes")))?;
     let dir = base_dir.ok_or_else(|| unsupported(format!("external file `{file}` needs the glTF file's directory")))?;
-    let full = dir.join(&file);
-    std::fs::read(&full)
-        .map_err(|source| SceneError::Io { path: format!("{} ({element} of {path})", full.display()), source })
+    // A buffer is read only from the glTF file's own folder or below it: a scene file must not
+    // make the harness read arbitrary files (`/etc/shadow`, `../../secret`), symlinks included.
+    let relative = Path::new(&file);
+    let escapes = relative.components().any(|c| !matches!(c, std::path::Component::Normal(_)));
+    if escapes || file.is_empty() {
+        return Err(unsupported(format!(
+            "URI `{uri}`: external buffers must be relative paths inside the glTF file's folder (no `..`, no absolute path)"
+        )));
+    }
+    let full = dir.join(relative);
+    let io = |source| SceneError::Io { path: format!("{} ({element} of {path})", full.display()), source };
+    let folder = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    let (real_dir, real_file) = (folder.canonicalize().map_err(io)?, full.canonicalize().map_err(io)?);
+    if !real_file.starts_with(&real_dir) {
+        return Err(unsupported(format!(
+            "URI `{uri}` resolves to {}, outside the glTF file's folder {}",
+            real_file.display(),
+            real_dir.display()
+        )));
+    }
+    std::fs::read(&real_file).map_err(io)
 }
 
 /// Standard base64, padding optional. `None` on a character outside the alphabet.
@@ -274,8 +292,8 @@ fn scene_nodes<'a>(path: &str, document: &'a gltf::Document) -> Result<Vec<(gltf
 fn append(path: &str, mesh: &mut Mesh, part: &Mesh, transform: Mat4, node: &gltf::Node) -> Result<(), SceneError> {
     let start = mesh.positions.len();
     mesh.append(part, transform);
-    match mesh.positions[start..].iter().position(|p| !p.is_finite()) {
-        Some(i) => Err(SceneError::NonFinite {
+    match mesh.positions[start..].iter().position(|&p| !crate::geom::coordinate_in_range(p)) {
+        Some(i) => Err(SceneError::OutOfRange {
             path: path.into(),
             location: Location::Element(format!("{} transform", named("node", node.name(), node.index()))),
             detail: format!("vertex {:?} becomes {:?}", part.positions[i], mesh.positions[start + i]),
@@ -313,6 +331,10 @@ fn read_primitive(
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         let location = Location::Element(element(&format!("POSITION[{i}]")));
         return Err(SceneError::NonFinite { path: path.into(), location, detail: format!("{:?}", positions[i]) });
+    }
+    if let Some(i) = positions.iter().position(|&p| !crate::geom::coordinate_in_range(p)) {
+        let location = Location::Element(element(&format!("POSITION[{i}]")));
+        return Err(SceneError::OutOfRange { path: path.into(), location, detail: format!("{:?}", positions[i]) });
     }
     let corners: Vec<u32> = match primitive.indices() {
         Some(accessor) => {

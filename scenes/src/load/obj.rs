@@ -75,9 +75,15 @@ pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
     };
     // Materials play no part in ray-tracing benchmarks: a missing or broken .mtl must not fail.
     let no_materials = |_: &std::path::Path| -> tobj::MTLLoadResult { Ok(Default::default()) };
-    let models = match tobj::load_obj_buf(&mut &bytes[..], &options, no_materials) {
-        Ok((models, _materials)) => models,
-        Err(err) => return Err(diagnose(path, bytes, &format!("tobj: {err}"))),
+    // tobj trusts some indices: `f 1/1/0` (normal index 0) multiplies `usize::MAX` by 3, which
+    // panics wherever overflow checks are on (found by the `obj` fuzz target; the input is in
+    // tests/fuzz/regressions/obj). Our own line checker names what is wrong with such a file, so
+    // a panic inside tobj is diagnosed like any error it returns.
+    let loaded = std::panic::catch_unwind(|| tobj::load_obj_buf(&mut &bytes[..], &options, no_materials));
+    let models = match loaded {
+        Ok(Ok((models, _materials))) => models,
+        Ok(Err(err)) => return Err(diagnose(path, bytes, &format!("tobj: {err}"))),
+        Err(_) => return Err(diagnose(path, bytes, "tobj panicked on this file")),
     };
     // tobj reads `l` records exactly like `f` records (`l 1 2 3` becomes a triangle). Whether
     // there are any is one quick pass over the bytes; only if so do we note which elements they are.
@@ -90,8 +96,8 @@ pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
     if elements.short > 0 {
         return Err(diagnose(path, bytes, "a face with fewer than 3 vertices"));
     }
-    if !mesh.positions.iter().all(|p| p.is_finite()) {
-        return Err(diagnose(path, bytes, "non-finite vertex coordinate"));
+    if !mesh.positions.iter().all(|&p| crate::geom::coordinate_in_range(p)) {
+        return Err(diagnose(path, bytes, "a vertex coordinate that is non-finite or beyond ±2^40"));
     }
     if mesh.indices.is_empty() {
         return Err(empty_error(path, bytes));
@@ -257,6 +263,8 @@ enum Problem {
     /// What was expected instead.
     Malformed(String),
     NonFinite,
+    /// Finite, but beyond ±[`crate::geom::MAX_COORDINATE`].
+    TooLarge,
     /// A vertex index and the vertex count it exceeds.
     OutOfRange(i64, usize),
 }
@@ -281,6 +289,7 @@ impl Blame {
             },
             Problem::Malformed(why) => SceneError::Malformed { path, location, detail: format!("`{quote}`: {why}") },
             Problem::NonFinite => SceneError::NonFinite { path, location, detail: format!("`{quote}`") },
+            Problem::TooLarge => SceneError::OutOfRange { path, location, detail: format!("`{quote}`") },
             Problem::OutOfRange(index, vertex_count) => {
                 SceneError::IndexOutOfRange { path, location, index, vertex_count }
             }
@@ -365,7 +374,10 @@ fn check_vertex(words: SplitWhitespace) -> Option<Problem> {
     if w == 0.0 {
         return Some(Problem::Malformed("the `w` component is zero".into()));
     }
-    numbers[..3].iter().any(|x| !(x / w).is_finite()).then_some(Problem::NonFinite)
+    if numbers[..3].iter().any(|x| !(x / w).is_finite()) {
+        return Some(Problem::NonFinite);
+    }
+    numbers[..3].iter().any(|x| (x / w).abs() > crate::geom::MAX_COORDINATE).then_some(Problem::TooLarge)
 }
 
 /// At least `n` numbers (tobj ignores any beyond).
