@@ -26,8 +26,8 @@ pub mod stats;
 use glam::Vec3;
 use scenes::{Camera, Ray};
 
-pub use registry::{Accel, STRUCTURES, StructureEntry, build_structure, find_structure};
-pub use stats::{Counters, NoStats, Stats};
+pub use registry::{Accel, STRUCTURES, StructureEntry, build_structure, find_structure, param_keys};
+pub use stats::{Counters, MAX_STEPS, NoStats, Stats};
 
 /// The nearest intersection found along a ray (DESIGN.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]

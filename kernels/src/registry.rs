@@ -1,7 +1,7 @@
 //! Structures by name: each entry pairs a builder (in `structures`) with its kernels (here).
 //! Adding a structure means one builder, one CPU kernel, one WGSL file and one entry below.
 
-use structures::{BuildError, BuildInput, Structure};
+use structures::{BuildError, BuildInput, Params, Structure};
 
 use crate::Traverse;
 
@@ -15,6 +15,11 @@ pub struct StructureEntry {
     /// `triangle` structures index the mesh; `voxel` structures index its voxelisation.
     pub family: &'static str,
     pub summary: &'static str,
+    /// The `--param` keys the builder reads (a test holds this list to what it really reads).
+    pub params: &'static [&'static str],
+    /// Resolves and range-checks the parameters without building (the harness checks every
+    /// case's parameters before the first build).
+    pub check: fn(&Params) -> Result<(), BuildError>,
     pub build: fn(&BuildInput) -> Result<Box<dyn Accel>, BuildError>,
 }
 
@@ -23,42 +28,56 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "bvh",
         family: "triangle",
         summary: "reference BVH: obvhs PLOC build, flattened to 32-byte nodes, robust ordered traversal",
+        params: &["bvh.preset"],
+        check: |p| structures::bvh::BvhPreset::from_params(p).map(drop),
         build: build_bvh,
     },
     StructureEntry {
         name: "ug",
         family: "triangle",
         summary: "uniform grid, Eq. 1 (ug.lambda, default 5)",
+        params: &["ug.lambda"],
+        check: |p| grid_check("ug", p),
         build: |input| build_grid("ug", input),
     },
     StructureEntry {
         name: "rg",
         family: "triangle",
         summary: "recursive grid, Jevans & Wyvill (rg.lambda 1, rg.gamma 16, rg.max_depth 3)",
+        params: &["rg.lambda", "rg.gamma", "rg.max_depth"],
+        check: |p| grid_check("rg", p),
         build: |input| build_grid("rg", input),
     },
     StructureEntry {
         name: "rg2",
         family: "triangle",
         summary: "two-level grid, Ize et al.: (8N)^0.6 top cells, 8·N_2 per cell",
+        params: &[],
+        check: |p| grid_check("rg2", p),
         build: |input| build_grid("rg2", input),
     },
     StructureEntry {
         name: "org",
         family: "triangle",
         summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8)",
+        params: &["org.lambda", "org.alpha", "org.gamma", "org.max_depth"],
+        check: |p| grid_check("org", p),
         build: |input| build_grid("org", input),
     },
     StructureEntry {
         name: "svo-naive",
         family: "voxel",
         summary: "seed 004's SVO: blocks of 8 i32 (0 empty, -1 leaf, else child block); --levels L",
+        params: &["voxel.levels"],
+        check: |p| structures::voxel::level_param(p).map(drop),
         build: |input| Ok(Box::new(structures::svo_naive::SvoNaive::build(input)?)),
     },
     StructureEntry {
         name: "svo",
         family: "voxel",
         summary: "plain SVO (seed 001 §2.1): 8-bit masks + first-child pointer, breadth-first; --levels L",
+        params: &["voxel.levels"],
+        check: |p| structures::voxel::level_param(p).map(drop),
         build: |input| Ok(Box::new(structures::svo::Svo::build(input)?)),
     },
     StructureEntry {
@@ -66,6 +85,17 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "voxel",
         summary: "Laine & Karras ESVO: child descriptors, far pointers, page headers, contours, attachments; \
                   --levels L --contours on|off --attributes raw|compressed --beam on|off",
+        params: &[
+            "voxel.levels",
+            "esvo.attributes",
+            "esvo.beam",
+            "esvo.beam_block",
+            "esvo.contours",
+            "esvo.contour_inherited",
+            "esvo.contour_max_ratio",
+            "esvo.lod_pixels",
+        ],
+        check: |p| structures::esvo::EsvoParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::esvo::Esvo::build(input)?)),
     },
     StructureEntry {
@@ -73,6 +103,8 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "voxel",
         summary: "sparse voxel DAG (seed 001, Kämpe 2013): bottom-up merged octree, mask + pointer per child; \
                   --levels L, svdag.leaves=bricks|bits, svdag.build=stream|octree",
+        params: &["voxel.levels", "svdag.leaves", "svdag.build"],
+        check: |p| structures::svdag::SvdagParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::svdag::Svdag::build(input)?)),
     },
 ];
@@ -81,9 +113,18 @@ fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
     Ok(Box::new(structures::bvh::build(input)?))
 }
 
+fn grid_check(name: &str, params: &Params) -> Result<(), BuildError> {
+    structures::grid::GridKind::from_params(name, params).map(drop)
+}
+
 fn build_grid(name: &str, input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
     let kind = structures::grid::GridKind::from_params(name, input.params)?;
     Ok(Box::new(structures::grid::build(input, kind)?))
+}
+
+/// Every `--param` key with the structure that reads it.
+pub fn param_keys() -> Vec<(&'static str, &'static str)> {
+    STRUCTURES.iter().flat_map(|e| e.params.iter().map(move |&k| (k, e.name))).collect()
 }
 
 pub fn find_structure(name: &str) -> Option<&'static StructureEntry> {
@@ -93,4 +134,26 @@ pub fn find_structure(name: &str) -> Option<&'static StructureEntry> {
 /// Builds the structure called `name`; `None` if there is no such structure.
 pub fn build_structure(name: &str, input: &BuildInput) -> Option<Result<Box<dyn Accel>, BuildError>> {
     find_structure(name).map(|entry| (entry.build)(input))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each entry's `params` list is exactly what its builder reads, so `--param` checking
+    /// (harness) neither rejects a real key nor lets a misspelt one through.
+    #[test]
+    fn declared_params_are_the_keys_each_builder_reads() {
+        let scene = scenes::load_scene("teapot").expect("teapot is built in");
+        for entry in STRUCTURES {
+            let params = structures::Params::parse(["voxel.levels=5"]).expect("parses");
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            (entry.build)(&input).unwrap_or_else(|e| panic!("{}: {e}", entry.name));
+            let mut read: Vec<String> = params.keys_read().into_iter().collect();
+            read.retain(|k| k != "voxel.levels" || entry.family == "voxel");
+            let mut declared: Vec<String> = entry.params.iter().map(|k| k.to_string()).collect();
+            declared.sort();
+            assert_eq!(read, declared, "{}: keys read vs declared", entry.name);
+        }
+    }
 }

@@ -3,6 +3,14 @@
 
 use std::ops::AddAssign;
 
+/// The most iterations any traversal loop makes for one ray, CPU and WGSL alike
+/// (`MAX_STEPS` in gpu/prelude.wgsl). A sound ray needs far fewer: an octree ray crosses at most
+/// 3·2^(L+1) cubes over all scales (3.1 M only at L = 19 for a ray grazing a surface end to end),
+/// a grid ray crosses each level's cells once. Reaching it means a corrupt structure or an input
+/// no check caught; the ray ends as a miss and is counted ([`Counters::rays_at_bound`]), so a bad
+/// case costs bounded time and shows in its results instead of hanging the run.
+pub const MAX_STEPS: u32 = 1 << 20;
+
 /// Hooks a kernel calls as it traverses; every method is a no-op for [`NoStats`].
 pub trait Stats {
     /// One iteration of the traversal loop.
@@ -13,6 +21,8 @@ pub trait Stats {
     fn prim_test(&mut self);
     fn push(&mut self);
     fn pop(&mut self);
+    /// The ray reached its kernel's iteration bound ([`MAX_STEPS`]) and was ended as a miss.
+    fn at_bound(&mut self);
     /// Adds counts gathered elsewhere (a per-frame pre-pass).
     fn add(&mut self, counters: &Counters);
 }
@@ -33,6 +43,8 @@ impl Stats for NoStats {
     #[inline(always)]
     fn pop(&mut self) {}
     #[inline(always)]
+    fn at_bound(&mut self) {}
+    #[inline(always)]
     fn add(&mut self, _counters: &Counters) {}
 }
 
@@ -44,6 +56,8 @@ pub struct Counters {
     pub prim_tests: u64,
     pub pushes: u64,
     pub pops: u64,
+    /// Rays ended at the iteration bound (see [`MAX_STEPS`]); 0 for every sound structure.
+    pub rays_at_bound: u64,
 }
 
 impl Stats for Counters {
@@ -68,6 +82,10 @@ impl Stats for Counters {
         self.pops += 1;
     }
     #[inline(always)]
+    fn at_bound(&mut self) {
+        self.rays_at_bound += 1;
+    }
+    #[inline(always)]
     fn add(&mut self, counters: &Counters) {
         *self += *counters;
     }
@@ -80,5 +98,6 @@ impl AddAssign for Counters {
         self.prim_tests += o.prim_tests;
         self.pushes += o.pushes;
         self.pops += o.pops;
+        self.rays_at_bound += o.rays_at_bound;
     }
 }

@@ -16,7 +16,7 @@ use structures::esvo::{Attributes, Esvo};
 use structures::voxel::morton;
 
 use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
-use super::octree_ray::OctreeRay;
+use super::octree_ray::{OctreeRay, span_is_empty};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -87,7 +87,8 @@ fn cast_ray<S: Stats>(
     lod_k: f32,
     stats: &mut S,
 ) -> Option<CastHit<u32>> {
-    if esvo.is_empty() {
+    // A NaN span is empty (the clip below would drop a NaN bound).
+    if esvo.is_empty() || span_is_empty(t_min, t_max) {
         return None;
     }
     let oray = esvo.grid.to_octree_space(ray);

@@ -182,7 +182,13 @@ fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S
     let mut stack = [Level::default(); MAX_DEPTH - 1];
     let mut sp = 0usize;
     let mut cur = dda.enter(grid, 0, t_enter);
+    let mut guard = 0u32;
     'traverse: loop {
+        guard += 1;
+        if guard > crate::MAX_STEPS {
+            stats.at_bound();
+            return None;
+        }
         stats.step();
         stats.visit();
         let h = &grid.headers[cur.header as usize];

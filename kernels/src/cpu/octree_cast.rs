@@ -14,7 +14,7 @@
 
 use glam::Vec3;
 
-use super::octree_ray::{OctreeRay, S_MAX};
+use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
 use crate::Stats;
 
 /// What the caster needs from a node layout. Slots passed in are *world* child slots (bit set =
@@ -87,7 +87,8 @@ pub fn cast<L: CastNodes, S: Stats>(
     stats: &mut S,
 ) -> Option<CastHit<L::Node>> {
     let (mut t_min, mut t_max) = r.root_span(t_min, t_max);
-    if t_min > t_max {
+    // A NaN span (a non-finite ray) ends here too.
+    if span_is_empty(t_min, t_max) {
         return None;
     }
     // Every span the stack restores ends by the ray's own end, so once ADVANCE passes it no
@@ -112,7 +113,7 @@ pub fn cast<L: CastNodes, S: Stats>(
         }
     }
 
-    loop {
+    for _ in 0..crate::MAX_STEPS {
         stats.step();
         let d = match desc {
             Some(d) => d,
@@ -207,6 +208,8 @@ pub fn cast<L: CastNodes, S: Stats>(
             desc = None;
         }
     }
+    stats.at_bound();
+    None
 }
 
 /// Integer coordinates at `level` of the mirrored-frame cube at `pos`, world-oriented.

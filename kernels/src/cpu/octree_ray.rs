@@ -83,13 +83,24 @@ impl OctreeRay {
     }
 
     /// The span `(entry, exit)` of the root cube `[1, 2]³`, clipped to `(t_min, t_max)`; empty if
-    /// `entry > exit`.
+    /// `entry > exit`, as it is for a NaN or inverted `(t_min, t_max)` (`f32::max` would drop a
+    /// NaN bound and leave the span unbounded).
     #[inline(always)]
     pub fn root_span(&self, t_min: f32, t_max: f32) -> (f32, f32) {
+        if span_is_empty(t_min, t_max) {
+            return (f32::INFINITY, f32::NEG_INFINITY);
+        }
         let enter = self.plane_t(Vec3::splat(2.0));
         let exit = self.plane_t(Vec3::ONE);
         (enter.max_element().max(t_min), exit.min_element().min(t_max))
     }
+}
+
+/// True unless `t_min ≤ t_max`: an inverted span, or one with a NaN bound (which `f32::max` and
+/// `min` would otherwise drop, leaving the span unbounded), holds no hit.
+#[inline(always)]
+pub fn span_is_empty(t_min: f32, t_max: f32) -> bool {
+    !matches!(t_min.partial_cmp(&t_max), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal))
 }
 
 /// Position of the mirrored-frame point `p` (in `[1, 2]³`) back in octree (world-oriented)

@@ -57,7 +57,7 @@ pub struct ShadeContext {
 
 impl ShadeContext {
     pub fn for_scene(scene: &Scene, seed: u32) -> Self {
-        let d = scene.bounds().diagonal().max(f32::MIN_POSITIVE);
+        let d = scene.bounds().framed().diagonal();
         Self { light: scene.light_position(), epsilon: 1e-4 * d, ao_radius: 0.05 * d, seed }
     }
 }

@@ -17,7 +17,7 @@ use structures::svdag::{Leaves, Svdag};
 use structures::voxel::morton;
 
 use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
-use super::octree_ray::{OctreeRay, S_MAX};
+use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -88,7 +88,8 @@ fn face_normal(ray: &Ray, h: &CastHit<u32>) -> Vec3 {
 }
 
 fn trace<S: Stats>(dag: &Svdag, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    if dag.is_empty() {
+    // A NaN span is empty (the clip below would drop a NaN bound).
+    if dag.is_empty() || span_is_empty(t_min, t_max) {
         return None;
     }
     let nodes =

@@ -10,7 +10,7 @@ use scenes::{Camera, Ray};
 use structures::svo_naive::{EMPTY, LEAF, SvoNaive};
 
 use super::octree_cast::{CastHit, advance};
-use super::octree_ray::{OctreeRay, S_MAX};
+use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
 use super::svo::leaf_hit;
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
@@ -22,7 +22,8 @@ fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mu
     let oray = svo.grid.to_octree_space(ray);
     let r = OctreeRay::from_octree_space(&oray);
     let (mut t_min, mut t_max) = r.root_span(t_min, t_max);
-    if t_min > t_max {
+    // A NaN span (a non-finite ray) ends here too.
+    if span_is_empty(t_min, t_max) {
         return None;
     }
     let levels = svo.grid.level as usize;
@@ -41,7 +42,7 @@ fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mu
         }
     }
     let mut can_push = true;
-    loop {
+    for _ in 0..crate::MAX_STEPS {
         stats.step();
         stats.visit();
         let slot = idx ^ r.mirror_mask;
@@ -108,6 +109,8 @@ fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mu
             can_push = true;
         }
     }
+    stats.at_bound();
+    None
 }
 
 impl Traverse for SvoNaive {

@@ -42,7 +42,14 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     if (!enters(slab_span(ray.origin, inv, root.lo, root.hi, t_min, best_t))) {
         return no_hit();
     }
+    // A tree enters each node at most once per ray; the guard holds a corrupt one to MAX_STEPS.
+    var guard = 0u;
     loop {
+        guard += 1u;
+        if (guard > MAX_STEPS) {
+            count_bound();
+            return no_hit();
+        }
         count_step();
         let n = bvh_node(node);
         if (n.count > 0u) {

@@ -72,11 +72,21 @@ pub struct GpuHit {
     pub prim: u64,
     /// Loop iterations of the ray's traversal (0 unless counted).
     pub steps: u32,
+    /// The counted run ended this ray at the kernel's iteration bound (`MAX_STEPS`).
+    pub at_bound: bool,
 }
+
+/// The step word's flag for a ray ended at the bound (`AT_BOUND_BIT` in prelude.wgsl).
+const AT_BOUND_BIT: u32 = 1 << 31;
 
 impl GpuHit {
     fn from_words(w: [u32; 4]) -> Self {
-        Self { t: f32::from_bits(w[0]), prim: u64::from(w[1]) | (u64::from(w[2]) << 32), steps: w[3] }
+        Self {
+            t: f32::from_bits(w[0]),
+            prim: u64::from(w[1]) | (u64::from(w[2]) << 32),
+            steps: w[3] & !AT_BOUND_BIT,
+            at_bound: w[3] & AT_BOUND_BIT != 0,
+        }
     }
 
     pub fn is_hit(&self) -> bool {
@@ -461,7 +471,7 @@ fn workgroups(invocations: u32, max_dim: u32) -> (u32, u32) {
 
 #[cfg(test)]
 mod tests {
-    use super::workgroups;
+    use super::*;
 
     #[test]
     fn wide_dispatches_split_into_rows() {
@@ -470,5 +480,17 @@ mod tests {
         assert_eq!(workgroups(65_536, 65_535), (1024, 1));
         assert_eq!(workgroups(64 * 65_535 + 1, 65_535), (65_535, 2));
         assert_eq!(workgroups(640, 4), (4, 3));
+    }
+
+    /// The step word of a counted run carries the at-bound flag in its top bit (prelude.wgsl).
+    #[test]
+    fn the_step_word_splits_into_steps_and_the_bound_flag() {
+        let plain = GpuHit::from_words([1.5f32.to_bits(), 7, 0, 42]);
+        assert_eq!((plain.t, plain.prim, plain.steps, plain.at_bound), (1.5, 7, 42, false));
+        let bounded = GpuHit::from_words([0x7f80_0000, u32::MAX, u32::MAX, AT_BOUND_BIT | 1_048_576]);
+        assert_eq!((bounded.is_hit(), bounded.steps, bounded.at_bound), (false, 1_048_576, true));
+        let wgsl = include_str!("prelude.wgsl");
+        assert!(wgsl.contains("const AT_BOUND_BIT: u32 = 0x80000000u;"), "the shader's flag is this bit");
+        assert!(wgsl.contains(&format!("const MAX_STEPS: u32 = {}u;", crate::MAX_STEPS)), "one bound, CPU and GPU");
     }
 }

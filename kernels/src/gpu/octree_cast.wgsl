@@ -182,6 +182,7 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             have_desc = false;
         }
     }
+    count_bound();
     return miss;
 }
 

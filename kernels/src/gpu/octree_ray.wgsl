@@ -8,9 +8,6 @@ const S_MAX: u32 = 23u;
 const DIR_EPSILON: f32 = 1.1920928955078125e-7;
 // Stands in for ±infinity in spans (WGSL constants cannot be infinite).
 const BIG: f32 = 3.4028234663852886e38;
-// A bound on loop iterations, far above any real ray's (tens to a few hundred), so that a
-// corrupt structure cannot hang the device; a ray that reaches it reports a miss.
-const MAX_STEPS: u32 = 1u << 16u;
 
 struct OctreeRay {
     coef: vec3<f32>,
@@ -63,6 +60,10 @@ fn box_span(r: OctreeRay, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
 
 // The span (entry, exit) of the root cube clipped to (t_min, t_max); empty if entry > exit.
 fn root_span(r: OctreeRay, t_min: f32, t_max: f32) -> vec2<f32> {
+    // A NaN or inverted span is empty, as on the CPU (max/min may drop a NaN operand).
+    if (!(t_min <= t_max)) {
+        return vec2<f32>(1.0, 0.0);
+    }
     let enter = plane_t(r, vec3<f32>(2.0));
     let exit = plane_t(r, vec3<f32>(1.0));
     return vec2<f32>(max(max(max(enter.x, enter.y), enter.z), t_min), min(min(min(exit.x, exit.y), exit.z), t_max));

@@ -59,6 +59,18 @@ fn count_step() {
     }
 }
 
+// The most iterations any traversal loop makes for one ray: kernels::MAX_STEPS, the CPU's bound.
+// A ray that reaches it ends as a miss and, in the counted run, sets AT_BOUND_BIT in its step
+// word (GpuHit::at_bound), so the harness reports it instead of the device hanging.
+const MAX_STEPS: u32 = 1048576u;
+const AT_BOUND_BIT: u32 = 0x80000000u;
+
+fn count_bound() {
+    if (COUNT_STEPS) {
+        steps |= AT_BOUND_BIT;
+    }
+}
+
 const MISS_T_BITS: u32 = 0x7f800000u;
 const NO_PRIM: u32 = 0xffffffffu;
 const TILE: u32 = 8u;

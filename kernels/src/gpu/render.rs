@@ -25,6 +25,18 @@ impl GpuRender {
         let steps = self.steps.as_ref()?;
         Some(steps.iter().map(|&s| u64::from(s)).sum::<u64>() as f64 / steps.len().max(1) as f64)
     }
+
+    /// Image rays the counted run ended at the iteration bound (0 when not counted).
+    pub fn rays_at_bound(&self) -> u64 {
+        let (w, h) = (self.frame.width, self.frame.height);
+        let counted = self.run.counted.iter().flatten().enumerate();
+        counted
+            .filter(|&(i, hit)| {
+                let (x, y) = Frame::pixel_of(w, i);
+                hit.at_bound && x < w && y < h
+            })
+            .count() as u64
+    }
 }
 
 /// Renders `camera`'s primary rays through `accel`'s GPU kernel; `Ok(None)` when the structure

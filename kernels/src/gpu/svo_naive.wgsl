@@ -96,5 +96,6 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
             can_push = true;
         }
     }
+    count_bound();
     return no_hit();
 }

@@ -22,6 +22,11 @@ pub enum BvhPreset {
 }
 
 impl BvhPreset {
+    /// `bvh.preset` (default `medium`).
+    pub fn from_params(params: &crate::Params) -> Result<Self, BuildError> {
+        params.get("bvh.preset", BvhPreset::Medium)
+    }
+
     pub const ALL: [BvhPreset; 5] = [Self::Fastest, Self::VeryFast, Self::Fast, Self::Medium, Self::Slow];
 
     pub fn name(self) -> &'static str {
@@ -61,7 +66,7 @@ impl std::str::FromStr for BvhPreset {
 
 /// Builds the reference BVH over the input's triangle soup.
 pub fn build(input: &BuildInput) -> Result<Bvh, BuildError> {
-    let preset: BvhPreset = input.params.get("bvh.preset", BvhPreset::Medium)?;
+    let preset = BvhPreset::from_params(input.params)?;
     let tris: Vec<ObvhsTriangle> = input
         .triangles
         .iter()

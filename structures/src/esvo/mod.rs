@@ -88,15 +88,30 @@ impl EsvoParams {
         if !(2..=32).contains(&beam_block) {
             return Err(BuildError::BadParam { key: "esvo.beam_block".into(), detail: "must be 2..=32 pixels".into() });
         }
+        let contour_max_ratio = params.get("esvo.contour_max_ratio", d.contour_max_ratio)?;
+        let contour_inherited = params.get("esvo.contour_inherited", d.contour_inherited)?;
+        let lod_pixels = params.get("esvo.lod_pixels", d.lod_pixels)?;
+        for (key, value) in [
+            ("esvo.contour_max_ratio", contour_max_ratio),
+            ("esvo.contour_inherited", contour_inherited),
+            ("esvo.lod_pixels", lod_pixels),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(BuildError::BadParam {
+                    key: key.into(),
+                    detail: format!("{value} is not a finite number ≥ 0"),
+                });
+            }
+        }
         Ok(Self {
             level: voxel::level_param(params)?,
             contours: on_off(params, "esvo.contours", d.contours)?,
-            contour_max_ratio: params.get("esvo.contour_max_ratio", d.contour_max_ratio)?,
-            contour_inherited: params.get("esvo.contour_inherited", d.contour_inherited)?,
+            contour_max_ratio,
+            contour_inherited,
             attributes,
             beam: on_off(params, "esvo.beam", d.beam)?,
             beam_block,
-            lod_pixels: params.get("esvo.lod_pixels", d.lod_pixels)?,
+            lod_pixels,
         })
     }
 }

@@ -57,9 +57,9 @@ impl GridKind {
             GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } | GridKind::Org { lambda, .. }
                 if !positive(lambda) =>
             {
-                bad("lambda", "must be positive")
+                bad("lambda", "must be positive and finite")
             }
-            GridKind::Org { alpha, .. } if !positive(alpha) => bad("alpha", "must be positive"),
+            GridKind::Org { alpha, .. } if !positive(alpha) => bad("alpha", "must be positive and finite"),
             GridKind::Rg { max_depth, .. } | GridKind::Org { max_depth, .. }
                 if !(1..=MAX_DEPTH).contains(&max_depth) =>
             {
@@ -70,9 +70,9 @@ impl GridKind {
     }
 }
 
-/// True for a positive number (false for NaN).
+/// True for a positive finite number (false for NaN and infinity).
 fn positive(x: f32) -> bool {
-    x > 0.0
+    x > 0.0 && x.is_finite()
 }
 
 /// A grid under construction: its level grid and which of its cells have sub-grids.
@@ -93,6 +93,32 @@ struct Split {
     refs: u64,
 }
 
+/// The top grid's cells and references for `kind` over `tris`, counted exactly as [`build`]
+/// will lay them out, in one pass and without allocating the grid: what the harness's memory
+/// budget needs before a build (a λ or a scene that asks for billions of references is refused,
+/// not attempted). Sub-grids add at most [`MAX_REFS`] references on top.
+pub fn estimate_top(tris: &[Triangle], kind: GridKind) -> (u64, u64) {
+    let bboxes: Vec<Aabb> = tris.par_iter().map(triangle_box).collect();
+    let bounds = bboxes.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
+    let bounds = if bounds.is_empty() { Aabb::new(Vec3::ZERO, Vec3::ZERO) } else { bounds };
+    let all: Vec<u32> = (0..tris.len() as u32).collect();
+    let h = header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1);
+    (crate::grid::resolution::cells(h.res), count_refs(&h, &all, &bboxes))
+}
+
+/// The top grid's resolution: Eq. 1 for UG and RG, (8N)^0.6 cells for RG-2, Algorithm 2 for ORG.
+fn top_resolution(kind: GridKind, all: &[u32], bboxes: &[Aabb], bounds: &Aabb) -> [u32; 3] {
+    let n = all.len() as f64;
+    let extent = bounds.max - bounds.min;
+    match kind {
+        GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } => eq1(extent, f64::from(lambda) * n),
+        GridKind::Rg2 => eq1(extent, (8.0 * n).powf(0.6)),
+        GridKind::Org { lambda, alpha, .. } => {
+            algorithm2(extent, f64::from(lambda) * n, alpha, mean_extent(all, bboxes, bounds))
+        }
+    }
+}
+
 pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     let tris = &input.triangles;
     if tris.len() >= SUBGRID_BIT as usize {
@@ -107,16 +133,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     let all: Vec<u32> = (0..tris.len() as u32).collect();
 
     // The top grid.
-    let n = tris.len() as f64;
-    let extent = bounds.max - bounds.min;
-    let res = match kind {
-        GridKind::Ug { lambda } | GridKind::Rg { lambda, .. } => eq1(extent, f64::from(lambda) * n),
-        GridKind::Rg2 => eq1(extent, (8.0 * n).powf(0.6)),
-        GridKind::Org { lambda, alpha, .. } => {
-            algorithm2(extent, f64::from(lambda) * n, alpha, mean_extent(&all, &bboxes, &bounds))
-        }
-    };
-    let top = build_level(header(bounds, res, 1), &all, &bboxes, true);
+    let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, &bboxes, true);
     let mut nodes = vec![Node { level: top, children: Vec::new() }];
     let mut levels = Vec::new();
     let mut stored_refs = nodes[0].level.refs.len() as u64;

@@ -38,10 +38,11 @@ pub struct VoxelGrid {
 
 impl VoxelGrid {
     /// The bounding cube of `bounds` (centred on it, side = its largest extent, grown by a relative
-    /// 2^-12 so no vertex lies exactly on the cube's far faces), at resolution `2^level`.
+    /// 2^-12 so no vertex lies exactly on the cube's far faces), at resolution `2^level`. A point
+    /// or microscopic scene gets the positive side [`Aabb::framed`] gives it.
     pub fn fit(bounds: Aabb, level: u32) -> Self {
-        let extent = bounds.extent().max_element();
-        let size = if extent > 0.0 { extent * (1.0 + 1.0 / 4096.0) } else { 1.0 };
+        let bounds = bounds.framed();
+        let size = bounds.extent().max_element() * (1.0 + 1.0 / 4096.0);
         Self { origin: bounds.center() - Vec3::splat(size * 0.5), size, level }
     }
 
@@ -179,6 +180,28 @@ pub fn level_param(params: &crate::Params) -> Result<u32, crate::BuildError> {
         });
     }
     Ok(level)
+}
+
+/// About how many voxels a conservative voxelisation of `triangles` at `level` marks, without
+/// voxelising: each triangle covers about `area·(|n_x| + |n_y| + |n_z|)/h²` voxels (its projected
+/// areas in voxel units, `h` the voxel side) plus, once it is longer than a voxel, a band along
+/// its edges (half its perimeter in voxels); triangles smaller than a voxel share voxels with
+/// their neighbours, so they add only their area. Capped at the grid's `8^level`. O(N); the
+/// budget check (harness) multiplies it by each structure's measured bytes per voxel.
+pub fn estimate_surface_voxels(scene: &scenes::Scene, triangles: &[scenes::Triangle], level: u32) -> f64 {
+    let grid = VoxelGrid::fit(scene.bounds(), level);
+    let h = f64::from(grid.voxel_size());
+    let total: f64 = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| v.as_dvec3());
+            let cross = (b - a).cross(c - a);
+            let projected = 0.5 * (cross.x.abs() + cross.y.abs() + cross.z.abs());
+            let perimeter = (b - a).length() + (c - b).length() + (a - c).length();
+            projected / (h * h) + (0.5 * perimeter / h - 0.5).max(0.0)
+        })
+        .sum();
+    total.min(8f64.powi(level as i32))
 }
 
 /// Voxelises `scene` at `level` into an [`Octree`], streaming the voxeliser's chunks straight into
