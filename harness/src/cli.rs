@@ -119,7 +119,7 @@ pub struct RunArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub workload: Vec<WorkloadArg>,
     /// Ambient-occlusion rays per primary hit for the `ao` workload.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub ao_samples: u32,
     #[arg(long)]
     pub width: Option<u32>,
@@ -156,6 +156,10 @@ pub struct RunArgs {
     /// Write results.json, report.md and images/ directly into DIR instead of results/<run-id>/.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into --out even when it already holds a run, replacing it (without this, a run
+    /// refuses to overwrite another).
+    #[arg(long, requires = "out")]
+    pub overwrite: bool,
     /// Where run directories and the `latest` link go when --out is not given.
     #[arg(long, value_name = "DIR", default_value = "results")]
     pub results_dir: PathBuf,
@@ -165,6 +169,11 @@ pub struct RunArgs {
     /// Seed of the randomised workloads (AO directions).
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
+    /// Most memory the run may use, e.g. 8G, 512M or bytes (default: the memory the OS reports
+    /// available). Every scene, build and frame is estimated first; a case whose estimate passes
+    /// the limit is skipped with its reason instead of exhausting memory.
+    #[arg(long, value_name = "SIZE", value_parser = crate::budget::parse_size)]
+    pub memory_limit: Option<u64>,
     /// Time code even if the harness was compiled without optimisation (numbers are then meaningless).
     #[arg(long)]
     pub allow_unoptimized: bool,
@@ -180,7 +189,7 @@ pub struct CompareArgs {
     pub base: PathBuf,
     /// Threshold of one metric as METRIC=FRACTION (repeatable; 0.15 = 15 %), e.g. render=0.2.
     /// Overrides --thresholds. Metrics and defaults: bytes, components, nodes, pointers 1e-9;
-    /// triangles, hit_mismatches, prim_mismatches exact; steps_per_ray, visits_per_ray,
+    /// triangles, hit_mismatches, prim_mismatches, rays_at_bound exact; steps_per_ray, visits_per_ray,
     /// tests_per_ray, hit_fraction 1e-6; render 0.35 and build 1.0 per case (ratios to the
     /// reference, judged on their 95 % bootstrap interval); render_geomean, build_geomean 0.15 per
     /// structure; render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter times are

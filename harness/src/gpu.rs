@@ -67,6 +67,7 @@ pub fn measure(
         node_visits_per_ray_mean: 0.0,
         prim_tests_per_ray_mean: 0.0,
         hit_fraction: render.frame.hit_fraction(),
+        rays_at_bound: render.rays_at_bound(),
         agreement: Some(agreement::against_frame(&render.frame, cpu_frame, "cpu")),
         reference_timing: None,
         gpu: Some(GpuStats {

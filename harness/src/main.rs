@@ -2,6 +2,7 @@
 
 mod agreement;
 mod alloc;
+mod budget;
 mod cli;
 mod compare;
 mod gpu;

@@ -21,10 +21,39 @@ pub struct RunOutput {
 impl RunOutput {
     /// Creates the run directory: `out` if given, else `results_dir/<run-id>` with
     /// `results_dir/latest` pointing at it.
-    pub fn create(out: Option<&Path>, results_dir: &Path, results: Results) -> Result<Self> {
+    ///
+    /// A run never writes over another: `out` must not hold a run already (results.json or
+    /// cases.jsonl) unless `overwrite`, and two runs started in the same second get `<run-id>`, `<run-id>-2`, ….
+    pub fn create(out: Option<&Path>, overwrite: bool, results_dir: &Path, mut results: Results) -> Result<Self> {
         let dir = match out {
-            Some(dir) => dir.to_path_buf(),
-            None => results_dir.join(&results.run_id),
+            Some(dir) => {
+                let held = ["results.json", "cases.jsonl"].iter().map(|f| dir.join(f)).find(|p| p.exists());
+                if let Some(existing) = held.filter(|_| !overwrite) {
+                    anyhow::bail!(
+                        "{} already holds a run ({}); a second run would overwrite it: choose another --out, remove it, or pass --overwrite",
+                        dir.display(),
+                        existing.display()
+                    );
+                }
+                dir.to_path_buf()
+            }
+            None => {
+                fs::create_dir_all(results_dir).with_context(|| format!("creating {}", results_dir.display()))?;
+                let base = results.run_id.clone();
+                let mut n = 1;
+                // `create_dir` (not `_all`) fails on an existing directory, so the claim is atomic.
+                loop {
+                    let dir = results_dir.join(&results.run_id);
+                    match fs::create_dir(&dir) {
+                        Ok(()) => break dir,
+                        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 1000 => {
+                            n += 1;
+                            results.run_id = format!("{base}-{n}");
+                        }
+                        Err(e) => return Err(e).with_context(|| format!("creating {}", dir.display())),
+                    }
+                }
+            }
         };
         fs::create_dir_all(dir.join("images")).with_context(|| format!("creating {}", dir.display()))?;
         if out.is_none() {
@@ -48,10 +77,21 @@ impl RunOutput {
 
     /// Records a finished case on disk at once.
     pub fn push_case(&mut self, case: Case) -> Result<()> {
-        serde_json::to_writer(&mut self.jsonl, &case)?;
-        self.jsonl.write_all(b"\n")?;
+        // One write per line (serde straight to the file issued one write per token). A SIGKILL
+        // can still cut a large write short (Linux stops copying at a fatal signal), so the
+        // contract is: every newline-terminated line is a whole case; text after the last
+        // newline is the case in flight. results.json, replaced by rename, is always whole.
+        let mut line = serde_json::to_vec(&case)?;
+        line.push(b'\n');
+        self.jsonl.write_all(&line)?;
         self.jsonl.flush()?;
         self.results.cases.push(case);
+        self.write_summary()
+    }
+
+    /// Records a case that did not run.
+    pub fn push_skipped(&mut self, skipped: reports::SkippedCase) -> Result<()> {
+        self.results.skipped.push(skipped);
         self.write_summary()
     }
 

@@ -11,12 +11,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use kernels::cpu::render::{self, Frame, ShadeContext, Workload};
 use kernels::gpu::GpuContext;
 use kernels::{Accel, StructureEntry};
-use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedRender, Timing};
+use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedCase, SkippedRender, Timing};
 use scenes::{Camera, Scene, Triangle};
 use structures::{BuildInput, Params};
 
 use crate::agreement;
 use crate::alloc;
+use crate::budget::{self, Budget, BudgetError};
 use crate::cli::{Backend, Plan, RunArgs};
 use crate::gpu;
 use crate::images;
@@ -32,6 +33,27 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     validate(&plan)?;
     let gpu = if plan.backends.contains(&Backend::Gpu) { Some(gpu::context()?) } else { None };
     let params = Params::parse(plan.params.iter().map(String::as_str))?;
+    let in_run: Vec<&str> = plan.structures.iter().map(String::as_str).collect();
+    for warning in params.check_keys(&kernels::param_keys(), &in_run)? {
+        eprintln!("accel-bench: warning: {warning}");
+    }
+    // Every case's parameter values, before the first build: a bad value is a usage error.
+    for structure in &plan.structures {
+        let entry = kernels::find_structure(structure).context("validated above")?;
+        for (p, _) in variants(&plan, &params, structure) {
+            (entry.check)(&p).with_context(|| format!("structure '{structure}'"))?;
+        }
+    }
+    let budget = Budget::new(args.memory_limit);
+    let pixels = u64::from(plan.width) * u64::from(plan.height);
+    if pixels > u64::from(u32::MAX) {
+        bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
+    }
+    budget.check(
+        format!("a {}×{} frame", plan.width, plan.height),
+        budget::frame_bytes(plan.width, plan.height),
+        "a smaller --width/--height",
+    )?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
 
     let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
@@ -45,8 +67,9 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         settings: settings(&plan, &params, command),
         cases: Vec::new(),
         merged: Vec::new(),
+        skipped: Vec::new(),
     };
-    let mut out = RunOutput::create(args.out.as_deref(), &args.results_dir, results)?;
+    let mut out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
     eprintln!("accel-bench: writing {}", out.dir.display());
 
     let cases = plan.scenes.len() as u64
@@ -59,19 +82,52 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     let started = Instant::now();
     pool.install(|| -> Result<()> {
         for scene_name in &plan.scenes {
+            let matrix: Vec<(&String, Params, Option<String>)> = plan
+                .structures
+                .iter()
+                .flat_map(|s| variants(&plan, &params, s).into_iter().map(move |(p, v)| (s, p, v)))
+                .collect();
             bar.set_message(format!("{scene_name}: loading"));
             let t = Instant::now();
-            let scene = scenes::load_scene(scene_name).with_context(|| format!("scene '{scene_name}'"))?;
+            let scene = match load_scene(scene_name, &budget) {
+                Ok(scene) => scene,
+                Err(e) => {
+                    let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "scene" };
+                    let reason = format!("{e:#}");
+                    bar.suspend(|| eprintln!("  {scene_name}: skipped ({} cases): {reason}", matrix.len()));
+                    for (structure, _, variant) in matrix {
+                        out.push_skipped(skipped(scene_name, structure, variant, kind, &reason))?;
+                        bar.inc(1);
+                    }
+                    continue;
+                }
+            };
             let load_ms = ms_since(t);
             let mut ctx = SceneRun::new(&scene, load_ms, gpu);
-            for structure in &plan.structures {
-                for (params, variant) in variants(&plan, &params, structure) {
-                    let case = measure_case(&mut ctx, structure, &params, variant, &plan, args, &out, &bar)
-                        .with_context(|| format!("scene '{scene_name}', structure '{structure}'"))?;
-                    bar.suspend(|| eprintln!("{}", one_line(&case)));
-                    out.push_case(case)?;
-                    bar.inc(1);
+            for (structure, params, variant) in matrix {
+                // One case's failure, a panic included, costs that case alone: it is listed with
+                // its reason and the matrix goes on.
+                let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    measure_case(&mut ctx, structure, &params, variant.clone(), &plan, args, &out, &bar, &budget)
+                }));
+                match attempt {
+                    Ok(Ok(case)) => {
+                        bar.suspend(|| eprintln!("{}", one_line(&case)));
+                        out.push_case(case)?;
+                    }
+                    Ok(Err(e)) => {
+                        let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "error" };
+                        let reason = format!("{e:#}");
+                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
+                        out.push_skipped(skipped(scene_name, structure, variant, kind, &reason))?;
+                    }
+                    Err(panic) => {
+                        let reason = format!("panicked: {}", panic_message(panic.as_ref()));
+                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
+                        out.push_skipped(skipped(scene_name, structure, variant, "panic", &reason))?;
+                    }
                 }
+                bar.inc(1);
             }
         }
         Ok(())
@@ -83,7 +139,45 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         started.elapsed().as_secs_f64(),
         out.dir.display()
     );
+    let skipped = &out.results.skipped;
+    if !skipped.is_empty() {
+        eprintln!("accel-bench: {} cases did not run:", skipped.len());
+        for k in skipped {
+            eprintln!("  {} {} [{}]: {}", k.scene, k.structure, k.kind, k.reason);
+        }
+    }
+    // Budget refusals are the run working as asked; anything else is a failure to report.
+    let failed = skipped.iter().filter(|k| k.kind != "budget").count();
+    if failed > 0 {
+        bail!("{failed} cases failed (listed above, in results.json's `skipped` and in the report)");
+    }
     Ok(())
+}
+
+/// Loads a scene within the budget: a scene whose name gives its size is checked before it is
+/// generated, a subdivided one after its base is loaded and before it is subdivided.
+fn load_scene(name: &str, budget: &Budget) -> Result<Scene> {
+    let hint = "a smaller scene or a larger --memory-limit";
+    if let Some(bytes) = budget::scene_bytes(name) {
+        budget.check(format!("scene '{name}'"), bytes, hint)?;
+    } else if let Some((base, k)) = scenes::builtin::subdivision(name) {
+        let triangles = scenes::load_scene(base).with_context(|| format!("scene '{base}'"))?.triangle_count() as u64;
+        let bytes = triangles.saturating_mul(4u64.pow(k)).saturating_mul(budget::SCENE_BYTES_PER_TRIANGLE);
+        budget.check(format!("scene '{name}' ({triangles} × 4^{k} triangles)"), bytes, hint)?;
+    }
+    scenes::load_scene(name).with_context(|| format!("scene '{name}'"))
+}
+
+fn skipped(scene: &str, structure: &str, variant: Option<String>, kind: &str, reason: &str) -> SkippedCase {
+    SkippedCase { scene: scene.into(), structure: structure.into(), variant, kind: kind.into(), reason: reason.into() }
+}
+
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    match (panic.downcast_ref::<&str>(), panic.downcast_ref::<String>()) {
+        (Some(s), _) => s.to_string(),
+        (_, Some(s)) => s.clone(),
+        _ => "(no message)".into(),
+    }
 }
 
 /// The parameter sets one structure is measured with, each with its variant label: one per
@@ -204,11 +298,22 @@ fn measure_case(
     args: &RunArgs,
     out: &RunOutput,
     bar: &ProgressBar,
+    budget: &Budget,
 ) -> Result<Case> {
     let entry = kernels::find_structure(structure).context("unknown structure")?;
     let scene = ctx.scene;
     bar.set_message(format!("{}/{structure}: building", scene.name));
     let input = BuildInput { scene, triangles: ctx.triangles.clone(), params };
+    let estimate = budget::build_bytes(structure, &input);
+    let reference_estimate = match ctx.reference.is_none() && structure != REFERENCE {
+        true => budget::build_bytes(REFERENCE, &input),
+        false => 0,
+    };
+    let label = match params.get::<u32>("voxel.levels", 0) {
+        Ok(l) if entry.family == "voxel" => format!("building {structure} at level {l} on '{}'", scene.name),
+        _ => format!("building {structure} on '{}'", scene.name),
+    };
+    budget.check(label, estimate + reference_estimate, budget::build_hint(structure, params))?;
     // Every structure but the reference is timed in alternation with the reference, so that
     // `harness compare` can gate on ratios that machine load cancels out of.
     let paired = if structure == REFERENCE {
@@ -220,7 +325,8 @@ fn measure_case(
         }
         kernels::find_structure(REFERENCE)
     };
-    let (accel, build) = timed_builds(entry, paired, &input, plan)?;
+    let (accel, mut build) = timed_builds(entry, paired, &input, plan)?;
+    build.estimated_peak_bytes = Some(estimate);
     let memory = accel.memory();
     let mut case = Case {
         scene: scene.name.clone(),
@@ -352,6 +458,7 @@ fn timed_builds(
         timing: Timing::from_samples(&samples),
         peak_bytes: peak as u64,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
+        estimated_peak_bytes: None,
     };
     Ok((accel, build))
 }
@@ -406,6 +513,7 @@ fn timed_renders(
         node_visits_per_ray_mean: totals.node_visits as f64 / rays,
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),
+        rays_at_bound: totals.rays_at_bound,
         agreement: None,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         gpu: None,
@@ -444,8 +552,12 @@ fn one_line(case: &Case) -> String {
         .render
         .iter()
         .map(|r| {
+            let bound = match r.rays_at_bound {
+                0 => String::new(),
+                n => format!(", {n} rays ended at the step bound"),
+            };
             format!(
-                "{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray",
+                "{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray{bound}",
                 r.backend, r.workload, r.timing.ms_median, r.mrays_per_s, r.steps_per_ray_mean
             )
         })

@@ -3,39 +3,12 @@
 //! `compare` passes a rerun, even on a loaded machine, and fails doctored memory; `merge` tags
 //! each machine's cases.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
-/// One harness at a time: the tests' timings (and the loaded-machine test's load) stay their own.
-static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn turn() -> std::sync::MutexGuard<'static, ()> {
-    ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
-}
-
-fn harness(args: &[&str]) -> Output {
-    let _turn = turn();
-    harness_in_turn(args)
-}
-
-/// Runs the harness; the caller holds the turn.
-fn harness_in_turn(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_harness")).args(args).output().expect("the harness runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("accel-bench-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-const TINY: &[&str] = &["--width", "48", "--height", "32", "--reps", "2", "--warmup", "0", "--threads", "2"];
+use common::{TINY, harness, harness_in_turn, read_json, temp_dir, turn};
 
 #[test]
 fn a_run_writes_results_report_and_images() {
@@ -101,7 +74,7 @@ fn a_run_writes_results_report_and_images() {
 }
 
 #[test]
-fn a_bad_scene_stops_the_run_and_keeps_finished_cases() {
+fn a_bad_scene_is_skipped_with_its_error_and_the_run_goes_on() {
     let out = temp_dir("bad");
     let bad = out.join("broken.obj");
     std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").expect("write bad file");
@@ -115,6 +88,9 @@ fn a_bad_scene_stops_the_run_and_keeps_finished_cases() {
     assert!(stderr.contains("broken.obj") && stderr.contains("line 4"), "stderr: {stderr}");
     let results = read_json(&out.join("run").join("results.json"));
     assert_eq!(results["cases"].as_array().map(Vec::len), Some(1), "the teapot case survives");
+    let skipped = &results["skipped"][0];
+    assert_eq!((skipped["kind"].as_str(), skipped["structure"].as_str()), (Some("scene"), Some("bvh")), "{results}");
+    assert!(skipped["reason"].as_str().is_some_and(|r| r.contains("line 4")), "{skipped}");
     let _ = std::fs::remove_dir_all(&out);
 }
 

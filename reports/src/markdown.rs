@@ -8,6 +8,59 @@ use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results};
 
 /// Renders the whole report. Scenes appear in the order their first case ran.
+/// The cases that did not run (budget refusals, scenes that did not load, failed builds) and the
+/// renders whose rays reached the kernels' iteration bound; empty when there are none.
+pub fn not_run_section(results: &Results) -> String {
+    let mut out = String::new();
+    let cell = |s: &str| s.replace('|', "\\|").replace('\n', " ");
+    if !results.skipped.is_empty() {
+        let _ = writeln!(
+            out,
+            "## Cases that did not run
+"
+        );
+        let _ = writeln!(out, "| scene | structure | kind | reason |\n|---|---|---|---|");
+        for k in &results.skipped {
+            let structure = match &k.variant {
+                Some(v) => format!("{} ({v})", k.structure),
+                None => k.structure.clone(),
+            };
+            let _ = writeln!(out, "| {} | {} | {} | {} |", cell(&k.scene), cell(&structure), k.kind, cell(&k.reason));
+        }
+        out.push('\n');
+    }
+    let bounded: Vec<_> = results
+        .cases
+        .iter()
+        .flat_map(|c| c.render.iter().filter(|r| r.rays_at_bound > 0).map(move |r| (c, r)))
+        .collect();
+    if !bounded.is_empty() {
+        let _ = writeln!(
+            out,
+            "## Rays ended at the iteration bound
+"
+        );
+        let _ = writeln!(
+            out,
+            "A sound structure never reaches the bound (`kernels::MAX_STEPS`); these rays were ended as misses.\n"
+        );
+        let _ = writeln!(out, "| scene | structure | backend | workload | rays at the bound |\n|---|---|---|---|---:|");
+        for (c, r) in bounded {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} | {} |",
+                c.scene,
+                c.full_name(),
+                r.backend,
+                r.workload,
+                r.rays_at_bound
+            );
+        }
+        out.push('\n');
+    }
+    out
+}
+
 pub fn report(results: &Results) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# accel-bench report\n");
@@ -35,6 +88,7 @@ pub fn report(results: &Results) -> String {
          is kernel time alone (upload listed under the table), steps only are counted, and agreement is \
          with the same structure's CPU kernel.\n"
     );
+    out.push_str(&not_run_section(results));
     for (tag, view) in &views {
         let section = crate::paper::section(view);
         if let (Some(tag), false) = (tag, section.is_empty()) {

@@ -3,7 +3,7 @@
 //! run its machine, git and settings records ([`Results::merged`]), so one report shows them side
 //! by side and `harness compare` can still pair each case with its own machine's reference.
 
-use crate::schema::{Case, Machine, MergedRun, Results, SCHEMA};
+use crate::schema::{Case, Machine, MergedRun, Results, SCHEMA, SkippedCase};
 
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
@@ -50,6 +50,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         settings: first.settings.clone(),
         cases: Vec::new(),
         merged: Vec::new(),
+        skipped: Vec::new(),
     };
     for (tag, run) in runs {
         if run.schema != SCHEMA {
@@ -65,9 +66,13 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
                 settings: run.settings.clone(),
             });
             merged.cases.extend(run.cases.iter().map(|c| tagged(c, tag)));
+            merged
+                .skipped
+                .extend(run.skipped.iter().map(|k| SkippedCase { scene: format!("{} @{tag}", k.scene), ..k.clone() }));
         } else {
             merged.merged.extend(run.merged.iter().cloned());
             merged.cases.extend(run.cases.iter().cloned());
+            merged.skipped.extend(run.skipped.iter().cloned());
         }
     }
     let tags: Vec<&str> = merged.merged.iter().map(|m| m.tag.as_str()).collect();
@@ -125,6 +130,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 settings: m.settings.clone(),
                 cases: results.cases.iter().filter(|c| c.machine.as_deref() == Some(&m.tag)).cloned().collect(),
                 merged: Vec::new(),
+                skipped: Vec::new(),
             };
             (Some(m.tag.clone()), view)
         })

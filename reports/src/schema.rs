@@ -21,6 +21,22 @@ pub struct Results {
     /// each case names its run in [`Case::machine`]. Empty for a single run.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub merged: Vec<MergedRun>,
+    /// Cases of the matrix that did not run: refused for their memory budget, a scene that did
+    /// not load, a build that failed. The run went on without them.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub skipped: Vec<SkippedCase>,
+}
+
+/// A case of the matrix that produced no measurement, and why.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SkippedCase {
+    pub scene: String,
+    pub structure: String,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub variant: Option<String>,
+    /// `budget` (refused before the work), `scene` (the scene did not load) or `error`.
+    pub kind: String,
+    pub reason: String,
 }
 
 /// One of the runs a merged result file combines, under the tag its cases carry.
@@ -271,6 +287,10 @@ pub struct BuildStats {
     /// `None` for the reference itself and in files written before paired timing.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub reference_timing: Option<Timing>,
+    /// The budget check's estimate of `peak_bytes`, made before the first build (see
+    /// harness/src/budget.rs); recorded so the estimate can be checked against the peak.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub estimated_peak_bytes: Option<u64>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -303,6 +323,10 @@ pub struct RenderStats {
     pub node_visits_per_ray_mean: f64,
     pub prim_tests_per_ray_mean: f64,
     pub hit_fraction: f64,
+    /// Rays the kernel ended at its iteration bound (`kernels::MAX_STEPS`) in the counted pass;
+    /// absent when 0, as it is for every sound structure and input.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub rays_at_bound: u64,
     pub agreement: Option<Agreement>,
     /// The reference structure's render of the same rays, timed in alternation with this one's
     /// reps (see [`BuildStats::reference_timing`]).
@@ -371,4 +395,8 @@ pub struct Agreement {
     pub prim_mismatches: u64,
     /// Largest |t − t_ref| / t_ref over pixels both hit.
     pub max_rel_t_error: f64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }

@@ -160,3 +160,31 @@ fn esvo_cases_get_the_papers_memory_budget_table() {
         "{table}"
     );
 }
+
+#[test]
+fn cases_that_did_not_run_and_rays_at_the_bound_are_listed() {
+    let mut results = fixture();
+    assert!(markdown::not_run_section(&results).is_empty(), "nothing to list in the fixture");
+    results.skipped.push(reports::SkippedCase {
+        scene: "grass-2000000000".into(),
+        structure: "bvh".into(),
+        variant: None,
+        kind: "budget".into(),
+        reason: "scene 'grass-2000000000' needs about 476.8 GiB | more than the limit".into(),
+    });
+    results.cases[0].render[0].rays_at_bound = 7;
+    let md = markdown::report(&results);
+    assert!(md.contains("## Cases that did not run"), "{md}");
+    assert!(
+        md.contains("| grass-2000000000 | bvh | budget | scene 'grass-2000000000' needs about 476.8 GiB \\| more"),
+        "{md}"
+    );
+    assert!(md.contains("## Rays ended at the iteration bound") && md.contains("| 7 |"), "{md}");
+    let page = html::report(&results, &images(&results));
+    assert!(page.contains("id=\"not-run\"") && page.contains("476.8 GiB"), "the HTML lists them too");
+    // Both fields survive a round trip through results.json, and are absent when empty.
+    let back: Results = serde_json::from_str(&serde_json::to_string(&results).expect("serialise")).expect("parse");
+    assert_eq!((back.skipped.len(), back.cases[0].render[0].rays_at_bound), (1, 7));
+    let plain = serde_json::to_string(&fixture()).expect("serialise");
+    assert!(!plain.contains("\"skipped\"") && !plain.contains("rays_at_bound"), "absent when empty");
+}

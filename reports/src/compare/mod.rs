@@ -302,6 +302,7 @@ fn compare_case(
         det("visits_per_ray", nr.node_visits_per_ray_mean, br.node_visits_per_ray_mean);
         det("tests_per_ray", nr.prim_tests_per_ray_mean, br.prim_tests_per_ray_mean);
         det("hit_fraction", nr.hit_fraction, br.hit_fraction);
+        det("rays_at_bound", nr.rays_at_bound as f64, br.rays_at_bound as f64);
         if let (Some(na), Some(ba)) = (&nr.agreement, &br.agreement) {
             det("hit_mismatches", na.hit_mismatches as f64, ba.hit_mismatches as f64);
             det("prim_mismatches", na.prim_mismatches as f64, ba.prim_mismatches as f64);

@@ -29,6 +29,7 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     ("hit_fraction", Kind::Exact, 1e-6),
     ("hit_mismatches", Kind::Count, 0.0),
     ("prim_mismatches", Kind::Count, 0.0),
+    ("rays_at_bound", Kind::Count, 0.0),
     // Per case, judged on the 95 % interval of the change (README "Regression gate"): unchanged
     // reruns on a shared 2-core VM moved single render ratios by up to 25 % and build ratios by up
     // to 62 % (allocation-heavy builds are bimodal), so a single case fails when its render surely

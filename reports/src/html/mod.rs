@@ -37,6 +37,12 @@ pub fn report(results: &Results, images: &BTreeMap<String, String>) -> String {
         .collect();
     contents(&mut body, &scenes, !paper.is_empty(), !studies.is_empty());
     at_a_glance(&mut body, results, &scenes);
+    let not_run = crate::markdown::not_run_section(results);
+    if !not_run.is_empty() {
+        let _ = writeln!(body, "<section id=\"not-run\">");
+        body.push_str(&markdown_fragment(&not_run));
+        body.push_str("</section>\n");
+    }
     if !paper.is_empty() {
         let _ = writeln!(body, "<section id=\"paper\"><h2>Paper reproductions</h2>");
         for (tag, md) in &paper {

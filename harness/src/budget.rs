@@ -1,0 +1,238 @@
+//! Memory budgets, checked before the work: a scene, a build or a frame whose estimated bytes
+//! exceed what the run may use is refused with the estimate, the limit and what would fit, in
+//! well under a second, instead of aborting on a failed allocation or meeting the OOM killer.
+//!
+//! The limit is `--memory-limit`, else the memory the OS reports available (`MemAvailable`,
+//! read again before each case, so what the run already holds is counted). Estimates are models
+//! fitted to measured peaks (`build.peak_bytes`, which results record beside
+//! `build.estimated_peak_bytes` so every run re-checks them):
+//! - scenes: triangles × [`SCENE_BYTES_PER_TRIANGLE`], known before generation for `grass-<N>`;
+//! - frames: pixels × [`FRAME_BYTES_PER_PIXEL`] (the frames, counters and images a case holds);
+//! - the BVH: triangles × a constant; the grids: the top grid's cells and references, counted
+//!   exactly as the builder will lay them out ([`structures::grid::build::estimate_top`]), and as
+//!   many references again (at most the builder's cap) for the sub-grids;
+//! - voxel structures: [`structures::voxel::estimate_surface_voxels`] at the case's level ×
+//!   a per-structure constant in bytes per surface voxel, plus the triangle setup.
+
+use std::fmt;
+
+use structures::{BuildInput, Params};
+
+/// Scene generation and loading: positions, indices, normals and colours of the mesh, and the
+/// triangle soup every structure reads (36 B), with headroom for the loader's temporaries.
+pub const SCENE_BYTES_PER_TRIANGLE: u64 = 256;
+
+/// A case's frames: the timed frame, the counted frame and its per-pixel counters, the CPU
+/// primary frame kept for GPU rows and the reference's, the heat map, and both PNG buffers.
+pub const FRAME_BYTES_PER_PIXEL: u64 = 320;
+
+/// Work is refused when its estimate times this passes the allowance: the fitted estimates run
+/// from about 0.35× to 5× the measured peaks (worst under-estimates: RG-2 on menger, the SVDAG's
+/// streamed build on grass at L = 8, ESVO on grass at L = 10 at 0.73×).
+pub const HEADROOM: f64 = 1.5;
+
+fn with_headroom(bytes: u64) -> u64 {
+    (bytes as f64 * HEADROOM).min(u64::MAX as f64) as u64
+}
+
+/// The budget a run works within.
+#[derive(Clone, Debug)]
+pub struct Budget {
+    /// `--memory-limit`, if given.
+    limit: Option<u64>,
+}
+
+/// Work refused for its memory.
+#[derive(Debug)]
+pub struct BudgetError {
+    pub what: String,
+    pub needed: u64,
+    pub limit: u64,
+    pub source: &'static str,
+    pub hint: String,
+}
+
+impl fmt::Display for BudgetError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} needs about {} ({} with the estimate's {HEADROOM}× headroom) but the memory limit {} is {}; {}",
+            self.what,
+            size(self.needed),
+            size(with_headroom(self.needed)),
+            self.source,
+            size(self.limit),
+            self.hint
+        )
+    }
+}
+
+impl std::error::Error for BudgetError {}
+
+impl Budget {
+    pub fn new(limit: Option<u64>) -> Self {
+        Self { limit }
+    }
+
+    /// The bytes the run may still use now, and where that figure comes from.
+    fn allowance(&self) -> (u64, &'static str) {
+        let available = available_bytes();
+        match (self.limit, available) {
+            (Some(limit), Some(avail)) if avail < limit => {
+                (avail, "(what the OS reports available, below --memory-limit)")
+            }
+            (Some(limit), _) => {
+                (limit.saturating_sub(crate::alloc::live_bytes() as u64), "(--memory-limit, less what the run holds)")
+            }
+            (None, Some(avail)) => (avail, "(what the OS reports available)"),
+            (None, None) => (u64::MAX, "(unknown on this OS; pass --memory-limit)"),
+        }
+    }
+
+    /// Refuses `needed` bytes of `what` when they pass the allowance.
+    pub fn check(&self, what: impl Into<String>, needed: u64, hint: impl Into<String>) -> Result<(), BudgetError> {
+        let (limit, source) = self.allowance();
+        if with_headroom(needed) <= limit {
+            return Ok(());
+        }
+        Err(BudgetError { what: what.into(), needed, limit, source, hint: hint.into() })
+    }
+}
+
+/// `MemAvailable` from `/proc/meminfo`, in bytes; `None` where there is no such file.
+pub fn available_bytes() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kib: u64 =
+        meminfo.lines().find_map(|l| l.strip_prefix("MemAvailable:"))?.split_whitespace().next()?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Bytes of a scene before it is generated, where its name says its size (`grass-<N>`,
+/// `name@sub<k>` of such a scene); `None` otherwise (files and the fixed built-in scenes are
+/// checked by their triangle count once loaded).
+pub fn scene_bytes(name: &str) -> Option<u64> {
+    scenes::builtin::estimated_triangles(name).map(|n| n.saturating_mul(SCENE_BYTES_PER_TRIANGLE))
+}
+
+/// Bytes of one case's frames at `width × height`.
+pub fn frame_bytes(width: u32, height: u32) -> u64 {
+    u64::from(width) * u64::from(height) * FRAME_BYTES_PER_PIXEL
+}
+
+/// Estimated peak heap of building `structure` on `input` (see the module doc).
+pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
+    let n = input.triangles.len() as f64;
+    let bytes = match structure {
+        "bvh" => 320.0 * n,
+        "ug" | "rg" | "rg2" | "org" => {
+            // The top grid's cells and references, counted as the builder will lay them out; the
+            // sub-grids of the recursive kinds add at most as many references again, and at most
+            // the builder's own cap (`structures::grid::MAX_REFS`).
+            let Ok(kind) = structures::grid::GridKind::from_params(structure, input.params) else { return 0 };
+            let (cells, refs) = structures::grid::build::estimate_top(&input.triangles, kind);
+            // Bytes per triangle (bounding boxes, id lists, the recursive kinds' per-level
+            // temporaries) fitted to measured peaks × 1.5. RG-2's top grid is small ((8N)^0.6
+            // cells) and its 8·N_2 second-level cells per top cell scale with N.
+            let (per_triangle, sub_factor) = match structure {
+                "ug" => (48.0, 0.0),
+                "rg" => (96.0, 1.0),
+                "rg2" => (400.0, 0.0),
+                _ => (48.0, 1.0),
+            };
+            let sub = (sub_factor * refs as f64).min(structures::grid::MAX_REFS as f64);
+            per_triangle * n + 8.0 * cells as f64 + 12.0 * (refs as f64 + sub)
+        }
+        voxel => {
+            let level = input.params.get("voxel.levels", 10u32).unwrap_or(10);
+            let voxels = structures::voxel::estimate_surface_voxels(input.scene, &input.triangles, level);
+            // (bytes per triangle, bytes per estimated surface voxel, fixed): least-squares fits
+            // to measured peaks (dragon, bunny, city, grass-100k, menger at L = 8 and 10), × 1.5.
+            let (per_triangle, per_voxel, fixed) = match voxel {
+                "svo-naive" | "svo" => (16.0, 64.0, 0.0),
+                "esvo" => (256.0, 80.0, 0.0),
+                // The streamed build holds a batch of sub-cubes, not the octree.
+                "svdag" => (32.0, 12.0, 16.0 * 1_048_576.0),
+                _ => (256.0, 128.0, 0.0),
+            };
+            fixed + per_triangle * n + per_voxel * voxels
+        }
+    };
+    bytes.min(u64::MAX as f64) as u64
+}
+
+/// What to say when a build is refused.
+pub fn build_hint(structure: &str, params: &Params) -> String {
+    match kernels::find_structure(structure).map(|e| e.family) {
+        Some("voxel") => {
+            let level = params.get("voxel.levels", 10u32).unwrap_or(10);
+            format!(
+                "a lower --levels (voxel bytes grow about 4× per level; this case is at {level}) or a larger --memory-limit"
+            )
+        }
+        _ => "a smaller scene or a larger --memory-limit".into(),
+    }
+}
+
+/// `8G`, `512M`, `64k` (powers of 1024, optional `iB`/`B`) or plain bytes.
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let lower = t.to_ascii_lowercase();
+    let lower = lower.trim_end_matches("ib").trim_end_matches('b');
+    let (digits, shift) = match lower.as_bytes().last() {
+        Some(b'k') => (&lower[..lower.len() - 1], 10),
+        Some(b'm') => (&lower[..lower.len() - 1], 20),
+        Some(b'g') => (&lower[..lower.len() - 1], 30),
+        Some(b't') => (&lower[..lower.len() - 1], 40),
+        _ => (lower, 0),
+    };
+    let value: f64 = digits.trim().parse().map_err(|_| format!("'{t}' is not a size (e.g. 8G, 512M, 1000000)"))?;
+    if !(value.is_finite() && value > 0.0) {
+        return Err(format!("'{t}' is not a positive size"));
+    }
+    let bytes = value * (1u64 << shift) as f64;
+    if bytes >= u64::MAX as f64 {
+        return Err(format!("'{t}' is too large"));
+    }
+    Ok(bytes as u64)
+}
+
+/// Bytes in binary units for messages.
+pub fn size(bytes: u64) -> String {
+    let b = bytes as f64;
+    match bytes {
+        0..1024 => format!("{bytes} B"),
+        1024..1_048_576 => format!("{:.1} KiB", b / 1024.0),
+        1_048_576..1_073_741_824 => format!("{:.1} MiB", b / 1_048_576.0),
+        _ => format!("{:.1} GiB", b / 1_073_741_824.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_in_binary_units() {
+        assert_eq!(parse_size("8G"), Ok(8 << 30));
+        assert_eq!(parse_size("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_size("1.5k"), Ok(1536));
+        assert_eq!(parse_size("1000"), Ok(1000));
+        for bad in ["", "G", "-1G", "NaN", "inf", "1e30T", "eight"] {
+            assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_refusal_names_the_work_the_estimate_and_the_limit() {
+        let budget = Budget::new(Some(1 << 20));
+        assert!(budget.check("a small thing", 1000, "").is_ok());
+        assert!(budget.check("under two thirds of the limit", 500_000, "").is_ok());
+        assert!(budget.check("over two thirds", 700_000, "").is_err(), "the headroom applies");
+        let err = budget.check("scene 'grass-2000000000'", 1 << 40, "a smaller N").expect_err("1 TiB > 1 MiB");
+        let text = err.to_string();
+        assert!(
+            text.contains("grass-2000000000") && text.contains("1024.0 GiB") && text.contains("a smaller N"),
+            "{text}"
+        );
+    }
+}

@@ -1,0 +1,277 @@
+//! Hostile but plausible input, as a new user or an unattended matrix meets it: every case gets a
+//! specific error or a defined result, never a panic, a hang or an abort, and one bad case costs
+//! one line of the run, never the run.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{TINY, harness, read_json, temp_dir, turn};
+
+/// Every structure, so each one meets each input.
+const ALL: &str = "bvh,ug,rg,rg2,org,svo-naive,svo,esvo,svdag";
+
+/// Runs the harness with a deadline: a hang fails the test instead of stalling CI.
+fn harness_within(args: &[&str], limit: Duration) -> Output {
+    let _turn = turn();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the harness starts");
+    let start = Instant::now();
+    while child.try_wait().expect("poll the harness").is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!("harness {args:?} ran past {limit:?}: a hang");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    child.wait_with_output().expect("the harness output")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn no_panic(o: &Output) {
+    let text = stderr(o);
+    assert!(!text.contains("panicked"), "a panic: {text}");
+}
+
+fn run_args<'a>(scenes: &'a str, structures: &'a str, out: &'a str) -> Vec<&'a str> {
+    let mut args = vec!["run", "--scenes", scenes, "--structures", structures, "--levels", "6", "--out", out];
+    args.extend_from_slice(TINY);
+    args.push("--no-images");
+    args
+}
+
+/// Degenerate geometry: a single point, a collinear triangle, a triangle 1e-30 across, and
+/// denormal coordinates. Each used to hang the octree caster or produce a NaN camera; now every
+/// structure measures each of them, within a bounded time and with no ray at the step bound.
+#[test]
+fn degenerate_meshes_get_a_defined_result_from_every_structure() {
+    let dir = temp_dir("degenerate");
+    let meshes = [
+        ("point", "v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n"),
+        ("collinear", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n"),
+        ("tiny", "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nf 1 2 3\n"),
+        ("denormal", "v 0 0 0\nv 1e-40 0 0\nv 0 1e-40 1e-41\nf 1 2 3\n"),
+    ];
+    let mut files = Vec::new();
+    for (name, text) in meshes {
+        let path = dir.join(format!("{name}.obj"));
+        std::fs::write(&path, text).expect("write mesh");
+        files.push(path.to_string_lossy().into_owned());
+    }
+    let scenes = files.join(",");
+    let out = dir.join("run").to_string_lossy().into_owned();
+    let o = harness_within(&run_args(&scenes, ALL, &out), Duration::from_secs(120));
+    no_panic(&o);
+    assert!(o.status.success(), "stderr: {}", stderr(&o));
+    let results = read_json(&dir.join("run").join("results.json"));
+    let cases = results["cases"].as_array().expect("cases");
+    assert_eq!(cases.len(), 4 * 9, "every scene × structure measured");
+    for case in cases {
+        for render in case["render"].as_array().expect("renders") {
+            assert!(render.get("rays_at_bound").is_none(), "{}: {render}", case["structure"]);
+            let mrays = render["mrays_per_s"].as_f64().expect("a number");
+            assert!(mrays.is_finite() && mrays > 0.0, "{}: {render}", case["structure"]);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Finite coordinates whose extent overflows f32 (they once panicked in the grid builder): the
+/// scene is refused at load with the line and the limit, its cases are listed as skipped, and the
+/// other scene's cases run.
+#[test]
+fn an_overflowing_scene_costs_its_own_cases_only() {
+    let dir = temp_dir("overflow");
+    let bad = dir.join("huge.obj");
+    std::fs::write(&bad, "v -3e38 -3e38 -3e38\nv 3e38 -3e38 3e38\nv 0 3e38 0\nf 1 2 3\n").expect("write");
+    let scenes = format!("{},teapot", bad.display());
+    let out = dir.join("run").to_string_lossy().into_owned();
+    let o = harness_within(&run_args(&scenes, "bvh,ug,org", &out), Duration::from_secs(120));
+    no_panic(&o);
+    assert!(!o.status.success(), "a scene that does not load fails the run's exit status");
+    let text = stderr(&o);
+    assert!(text.contains("huge.obj: line 1") && text.contains("2^40"), "{text}");
+    let results = read_json(&dir.join("run").join("results.json"));
+    assert_eq!(results["cases"].as_array().map(Vec::len), Some(3), "teapot's cases ran");
+    let skipped = results["skipped"].as_array().expect("skipped cases");
+    assert_eq!(skipped.len(), 3);
+    assert!(
+        skipped.iter().all(|k| k["kind"] == "scene" && k["scene"].as_str().is_some_and(|s| s.ends_with("huge.obj")))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Work that cannot fit is refused before it starts, in well under a second each, and listed with
+/// its reason; a run whose only misses are budget refusals succeeds.
+#[test]
+fn impossible_work_is_refused_up_front_and_the_matrix_goes_on() {
+    let dir = temp_dir("budget");
+    let out = dir.join("run").to_string_lossy().into_owned();
+    // A scene of two billion triangles, and voxel level 16 (2^48 voxels' worth of bunny surface)
+    // under a 16 GiB limit, beside cases that fit.
+    let mut args = vec![
+        "run",
+        "--scenes",
+        "grass-2000000000,bunny",
+        "--structures",
+        "bvh,svo-naive",
+        "--levels",
+        "6,16",
+        "--memory-limit",
+        "16G",
+        "--out",
+        &out,
+        "--no-images",
+    ];
+    args.extend_from_slice(TINY);
+    let start = Instant::now();
+    let o = harness_within(&args, Duration::from_secs(120));
+    no_panic(&o);
+    assert!(o.status.success(), "budget refusals alone do not fail the run: {}", stderr(&o));
+    let results = read_json(&dir.join("run").join("results.json"));
+    let ran: Vec<String> = results["cases"]
+        .as_array()
+        .expect("cases")
+        .iter()
+        .map(|c| format!("{} {}", c["scene"].as_str().unwrap_or(""), c["structure"].as_str().unwrap_or("")))
+        .collect();
+    assert_eq!(ran, ["bunny bvh", "bunny svo-naive"], "the cases that fit ran");
+    let skipped = results["skipped"].as_array().expect("skipped");
+    assert_eq!(skipped.len(), 4, "3 grass cases and svo-naive at level 16: {skipped:?}");
+    assert!(skipped.iter().all(|k| k["kind"] == "budget"), "{skipped:?}");
+    let level16 = skipped.iter().find(|k| k["scene"] == "bunny").expect("the level-16 case");
+    let reason = level16["reason"].as_str().unwrap_or("");
+    assert!(reason.contains("level 16") && reason.contains("--memory-limit") && reason.contains("GiB"), "{reason}");
+    let grass = skipped.iter().find(|k| k["scene"] == "grass-2000000000").expect("grass");
+    assert!(grass["reason"].as_str().is_some_and(|r| r.contains("grass-2000000000")), "{grass}");
+    // The estimates were recorded beside the peaks they predict.
+    for case in results["cases"].as_array().expect("cases") {
+        assert!(case["build"]["estimated_peak_bytes"].as_u64().is_some_and(|b| b > 0), "{case}");
+    }
+    // Refusals cost no real work: the whole run, bunny's cases included, is quick.
+    assert!(start.elapsed() < Duration::from_secs(60), "{:?}", start.elapsed());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_image_too_large_for_memory_or_u32_is_refused_before_any_work() {
+    for (size, expect) in [("200000", "rays are indexed by u32"), ("60000", "frame needs about")] {
+        let start = Instant::now();
+        let o = harness(&["run", "--scenes", "teapot", "--structures", "bvh", "--width", size, "--height", size]);
+        no_panic(&o);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(expect), "{}", stderr(&o));
+        assert!(start.elapsed() < Duration::from_secs(10), "refused in {:?}", start.elapsed());
+    }
+}
+
+/// A misspelt key, a NaN value and an out-of-range level are usage errors before any work.
+#[test]
+fn bad_parameters_are_rejected_with_what_would_work() {
+    let cases: [(&[&str], &[&str]); 5] = [
+        (&["--structures", "org", "--param", "org.lamda=2"], &["org.lamda", "did you mean 'org.lambda'", "valid keys"]),
+        (&["--structures", "org", "--param", "org.lambda=NaN"], &["org.lambda", "positive and finite"]),
+        (&["--structures", "esvo", "--param", "esvo.lod_pixels=-1"], &["esvo.lod_pixels", "≥ 0"]),
+        (&["--structures", "svo", "--levels", "40"], &["voxel.levels", "40"]),
+        (&["--structures", "bvh", "--param", "bvh.preset=fastest-ever"], &["bvh.preset", "expected one of"]),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["run", "--scenes", "teapot", "--out", "/nonexistent/never-written"];
+        args.extend_from_slice(extra);
+        let o = harness(&args);
+        no_panic(&o);
+        assert!(!o.status.success(), "{extra:?}");
+        let text = stderr(&o);
+        for e in expect {
+            assert!(text.contains(e), "{extra:?}: expected '{e}' in: {text}");
+        }
+    }
+    // A key of a structure outside the run is a warning, not an error.
+    let dir = temp_dir("foreign-key");
+    let out = dir.join("run").to_string_lossy().into_owned();
+    let mut args = run_args("teapot", "bvh", &out);
+    args.extend(["--param", "org.lambda=2"]);
+    let o = harness(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("'org.lambda' is read only by org, which is not in this run"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_unwritable_out_is_a_clear_error() {
+    let dir = temp_dir("unwritable");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "not a folder").expect("write");
+    let out = file.join("run").to_string_lossy().into_owned();
+    let o = harness(&run_args("teapot", "bvh", &out));
+    no_panic(&o);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("creating") && stderr(&o).contains("a-file"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// SIGKILL in the middle of a case leaves results.json, cases.jsonl and the reports valid, holding
+/// every finished case; a second run into the same folder is refused and leaves them as they were.
+#[test]
+#[cfg(unix)]
+fn a_killed_run_keeps_every_finished_case_and_a_second_run_cannot_overwrite_it() {
+    let dir = temp_dir("killed");
+    let run = dir.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let args = run_args("teapot,bunny,dragon-11k,menger", "bvh,org,svo,esvo,svdag", &out);
+    let _turn = turn();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the harness starts");
+    let jsonl = run.join("cases.jsonl");
+    let start = Instant::now();
+    let lines = |p: &Path| std::fs::read_to_string(p).map(|t| t.lines().count()).unwrap_or(0);
+    while lines(&jsonl) < 4 {
+        assert!(child.try_wait().expect("poll").is_none(), "the run ended before it could be killed");
+        assert!(start.elapsed() < Duration::from_secs(120), "no cases after 120 s");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().expect("SIGKILL"); // std's kill is SIGKILL on Unix
+    let _ = child.wait();
+
+    // Every newline-terminated line is a whole case. A kill during the write of a line can leave
+    // a piece of it after the last newline (Linux stops a large write at a fatal signal): that
+    // unterminated tail is the case in flight, not a record.
+    let text = std::fs::read_to_string(&jsonl).expect("cases.jsonl");
+    let finished = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+    let jsonl_cases: Vec<serde_json::Value> = finished
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("cases.jsonl line {l}: {e}")))
+        .collect();
+    let results = read_json(&run.join("results.json"));
+    let cases = results["cases"].as_array().expect("cases");
+    // cases.jsonl is appended before results.json is rewritten, so results.json may lack the
+    // last finished case, never more.
+    let (whole, listed) = (jsonl_cases.len(), cases.len());
+    assert!(whole >= 3 && (listed == whole || listed + 1 == whole), "{listed} in results.json, {whole} in cases.jsonl");
+    assert_eq!(cases[..], jsonl_cases[..cases.len()], "results.json holds the cases cases.jsonl recorded");
+    let report = std::fs::read_to_string(run.join("report.md")).expect("report.md");
+    assert!(report.contains("teapot"), "report.md is whole");
+    let html = std::fs::read_to_string(run.join("report.html")).expect("report.html");
+    assert!(html.trim_end().ends_with("</html>"), "report.html is whole");
+    drop(_turn);
+
+    let before = std::fs::read(run.join("results.json")).expect("read");
+    let o = harness(&run_args("teapot", "bvh", &out));
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("already holds a run"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(run.join("results.json")).expect("read"), before, "the first run is untouched");
+    let _ = std::fs::remove_dir_all(&dir);
+}
