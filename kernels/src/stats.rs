@@ -3,13 +3,19 @@
 
 use std::ops::AddAssign;
 
-/// The most iterations any traversal loop makes for one ray, CPU and WGSL alike
-/// (`MAX_STEPS` in gpu/prelude.wgsl). A sound ray needs far fewer: an octree ray crosses at most
-/// 3·2^(L+1) cubes over all scales (3.1 M only at L = 19 for a ray grazing a surface end to end),
-/// a grid ray crosses each level's cells once. Reaching it means a corrupt structure or an input
-/// no check caught; the ray ends as a miss and is counted ([`Counters::rays_at_bound`]), so a bad
-/// case costs bounded time and shows in its results instead of hanging the run.
-pub const MAX_STEPS: u32 = 1 << 20;
+/// The iteration bound of every traversal loop for one ray, CPU and WGSL alike (`MAX_STEPS` in
+/// gpu/prelude.wgsl): the grid DDA and `svo-naive` count iterations; the octree caster (`svo`,
+/// `esvo`, `svdag`) counts ADVANCE steps, since every other iteration is one of at most 23
+/// PUSHes in a row. No sound ray comes near it: an octree ray advances through at most
+/// 3·2^(L+1) cubes over all scales (3.1 M at L = 19, the deepest level any voxel structure
+/// builds, for a ray grazing a surface from end to end; a few tens on average), and a grid ray
+/// crosses each level's cells once. The BVH needs no counter: its children always lie after
+/// their parent (`structures::bvh`), so its loop ends within twice the node count.
+///
+/// Reaching the bound means a corrupt structure or an input no check caught: the ray ends as a
+/// miss and is counted ([`Counters::rays_at_bound`]), so a bad case costs bounded time and shows
+/// in its results instead of hanging the run.
+pub const MAX_STEPS: u32 = 1 << 23;
 
 /// Hooks a kernel calls as it traverses; every method is a no-op for [`NoStats`].
 pub trait Stats {

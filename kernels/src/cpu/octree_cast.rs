@@ -113,7 +113,10 @@ pub fn cast<L: CastNodes, S: Stats>(
         }
     }
 
-    for _ in 0..crate::MAX_STEPS {
+    // Every iteration PUSHes (at most S_MAX times in a row) or ADVANCEs, so bounding the advances
+    // bounds the loop; the count is checked only where the ray already tests for its end.
+    let mut advances = 0u32;
+    loop {
         stats.step();
         let d = match desc {
             Some(d) => d,
@@ -177,7 +180,11 @@ pub fn cast<L: CastNodes, S: Stats>(
         let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
-        if t_min > t_end {
+        advances += 1;
+        if t_min > t_end || advances >= crate::MAX_STEPS {
+            if advances >= crate::MAX_STEPS {
+                stats.at_bound();
+            }
             return None;
         }
 
@@ -208,8 +215,6 @@ pub fn cast<L: CastNodes, S: Stats>(
             desc = None;
         }
     }
-    stats.at_bound();
-    None
 }
 
 /// Integer coordinates at `level` of the mirrored-frame cube at `pos`, world-oriented.

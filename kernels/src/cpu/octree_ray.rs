@@ -14,8 +14,11 @@ use glam::Vec3;
 use scenes::Ray;
 use structures::voxel::VoxelGrid;
 
-/// Direction components smaller than this (in octree units) are replaced by it, keeping its sign,
-/// so the coefficients stay finite (seed 000 Appendix A uses `exp2(-s_max)` with `s_max = 23`).
+/// Direction components smaller than this fraction of the largest one are replaced by it, keeping
+/// their sign, so the coefficients stay finite (seed 000 Appendix A uses `exp2(-s_max)` with
+/// `s_max = 23` on a direction of unit size). Relative, because the octree-space direction is the
+/// world direction over the cube's side (so that `t` stays a world distance): for a scene 1e9
+/// wide an absolute 2^-23 would replace every component and turn every ray.
 pub const DIR_EPSILON: f32 = 1.0 / (1 << 23) as f32;
 
 /// The deepest scale the float-bit POP can resolve: 23 mantissa bits.
@@ -45,10 +48,11 @@ impl OctreeRay {
         let mut coef = [0.0f32; 3];
         let mut bias = [0.0f32; 3];
         let mut mirror_mask = 0;
+        let epsilon = DIR_EPSILON * ray.dir.abs().max_element();
         for a in 0..3 {
             let mut d = ray.dir[a];
-            if d.abs() < DIR_EPSILON {
-                d = DIR_EPSILON.copysign(d);
+            if d.abs() < epsilon {
+                d = epsilon.copysign(d);
             }
             coef[a] = 1.0 / -d.abs();
             bias[a] = coef[a] * ray.origin[a];
@@ -83,11 +87,13 @@ impl OctreeRay {
     }
 
     /// The span `(entry, exit)` of the root cube `[1, 2]³`, clipped to `(t_min, t_max)`; empty if
-    /// `entry > exit`, as it is for a NaN or inverted `(t_min, t_max)` (`f32::max` would drop a
-    /// NaN bound and leave the span unbounded).
+    /// `entry > exit`, as it is for a NaN or inverted `(t_min, t_max)` and a non-finite ray
+    /// (`f32::max` would drop a NaN bound and leave the span unbounded).
     #[inline(always)]
     pub fn root_span(&self, t_min: f32, t_max: f32) -> (f32, f32) {
-        if span_is_empty(t_min, t_max) {
+        // A non-finite origin or direction (NaN, infinite, or a zero direction) has no span either.
+        let finite = self.coef.is_finite() && self.bias.is_finite();
+        if span_is_empty(t_min, t_max) || !finite {
             return (f32::INFINITY, f32::NEG_INFINITY);
         }
         let enter = self.plane_t(Vec3::splat(2.0));

@@ -148,8 +148,9 @@ mod tests {
         fn new(set: &VoxelSet, ray: &Ray, t_min: f32, t_max: f32, eps: f64) -> Self {
             let oray = set.grid.to_octree_space(ray);
             let o = oray.origin.as_dvec3();
+            let epsilon = DIR_EPSILON * oray.dir.abs().max_element();
             let d = DVec3::from_array(
-                oray.dir.to_array().map(|x| if x.abs() < DIR_EPSILON { DIR_EPSILON.copysign(x) } else { x } as f64),
+                oray.dir.to_array().map(|x| if x.abs() < epsilon { epsilon.copysign(x) } else { x } as f64),
             );
             let h = 1.0 / (1u64 << set.grid.level) as f64;
             let slab = |lo: DVec3, hi: DVec3| {

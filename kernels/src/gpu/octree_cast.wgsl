@@ -94,7 +94,10 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
         }
     }
 
-    for (var guard = 0u; guard < MAX_STEPS; guard++) {
+    // Every iteration PUSHes (at most S_MAX times in a row) or ADVANCEs, so bounding the advances
+    // bounds the loop, as on the CPU (kernels/src/cpu/octree_cast.rs).
+    var advances = 0u;
+    loop {
         count_step();
         if (!have_desc) {
             desc = node_fetch(parent, scale);
@@ -152,7 +155,11 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
         let step_mask = advance_cube(&pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
-        if (t_min > t_end) {
+        advances += 1u;
+        if (t_min > t_end || advances >= MAX_STEPS) {
+            if (advances >= MAX_STEPS) {
+                count_bound();
+            }
             return miss;
         }
 
@@ -182,7 +189,6 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
             have_desc = false;
         }
     }
-    count_bound();
     return miss;
 }
 

@@ -4,7 +4,7 @@
 // plane_t, from exactly representable dyadic coordinates, as on the CPU.
 
 const S_MAX: u32 = 23u;
-// Direction components smaller than this (octree units) are replaced by it, keeping their sign.
+// Direction components smaller than this fraction of the largest are replaced by it, keeping their sign.
 const DIR_EPSILON: f32 = 1.1920928955078125e-7;
 // Stands in for ±infinity in spans (WGSL constants cannot be infinite).
 const BIG: f32 = 3.4028234663852886e38;
@@ -19,11 +19,13 @@ struct OctreeRay {
 fn octree_ray(o: vec3<f32>, dir: vec3<f32>) -> OctreeRay {
     var r: OctreeRay;
     r.mirror = 0u;
+    // Relative to the largest component, as on the CPU (OctreeRay::from_octree_space).
+    let epsilon = DIR_EPSILON * max(max(abs(dir.x), abs(dir.y)), abs(dir.z));
     for (var a = 0u; a < 3u; a++) {
         var d = dir[a];
-        if (abs(d) < DIR_EPSILON) {
-            // copysign(DIR_EPSILON, d), −0 included.
-            d = select(DIR_EPSILON, -DIR_EPSILON, (bitcast<u32>(d) & 0x80000000u) != 0u);
+        if (abs(d) < epsilon) {
+            // copysign(epsilon, d), −0 included.
+            d = select(epsilon, -epsilon, (bitcast<u32>(d) & 0x80000000u) != 0u);
         }
         let coef = 1.0 / -abs(d);
         var bias = coef * o[a];
@@ -60,8 +62,10 @@ fn box_span(r: OctreeRay, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
 
 // The span (entry, exit) of the root cube clipped to (t_min, t_max); empty if entry > exit.
 fn root_span(r: OctreeRay, t_min: f32, t_max: f32) -> vec2<f32> {
-    // A NaN or inverted span is empty, as on the CPU (max/min may drop a NaN operand).
-    if (!(t_min <= t_max)) {
+    // A NaN or inverted span is empty, as on the CPU (max/min may drop a NaN operand), and so is a
+    // non-finite ray's.
+    let finite = all(abs(r.coef) <= vec3<f32>(BIG)) && all(abs(r.bias) <= vec3<f32>(BIG));
+    if (!(t_min <= t_max) || !finite) {
         return vec2<f32>(1.0, 0.0);
     }
     let enter = plane_t(r, vec3<f32>(2.0));

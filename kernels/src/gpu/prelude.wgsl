@@ -59,10 +59,10 @@ fn count_step() {
     }
 }
 
-// The most iterations any traversal loop makes for one ray: kernels::MAX_STEPS, the CPU's bound.
-// A ray that reaches it ends as a miss and, in the counted run, sets AT_BOUND_BIT in its step
-// word (GpuHit::at_bound), so the harness reports it instead of the device hanging.
-const MAX_STEPS: u32 = 1048576u;
+// The iteration bound of every traversal loop (the octree caster's ADVANCE steps): kernels::MAX_STEPS,
+// the CPU's. A ray that reaches it ends as a miss and, in the counted run, sets AT_BOUND_BIT in
+// its step word (GpuHit::at_bound), so the harness reports it instead of the device hanging.
+const MAX_STEPS: u32 = 8388608u;
 const AT_BOUND_BIT: u32 = 0x80000000u;
 
 fn count_bound() {

@@ -26,6 +26,10 @@ impl Bvh {
                     seen[r as usize] += 1;
                 }
             } else if !self.triangles.is_empty() {
+                // Children after their parent: what bounds the CPU traversal loop (kernels/src/cpu/bvh.rs).
+                if (n.first as usize) <= i {
+                    return Err(format!("node {i}: children at {} do not follow their parent", n.first));
+                }
                 for c in [n.first as usize, n.first as usize + 1] {
                     let child = self.nodes.get(c).ok_or_else(|| format!("node {i}: child {c} out of range"))?;
                     if !(inside(child.min(), lo, hi) && inside(child.max(), lo, hi)) {
