@@ -33,8 +33,10 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     validate(&plan)?;
     let gpu = if plan.backends.contains(&Backend::Gpu) { Some(gpu::context()?) } else { None };
     let params = Params::parse(plan.params.iter().map(String::as_str))?;
+    // Only the user's own keys: a preset's (e.g. voxel.levels) are not the user's to misspell.
+    let given = Params::parse(args.params.iter().map(String::as_str))?;
     let in_run: Vec<&str> = plan.structures.iter().map(String::as_str).collect();
-    for warning in params.check_keys(&kernels::param_keys(), &in_run)? {
+    for warning in given.check_keys(&kernels::param_keys(), &in_run)? {
         eprintln!("accel-bench: warning: {warning}");
     }
     // Every case's parameter values, before the first build: a bad value is a usage error.
@@ -89,7 +91,9 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                 .collect();
             bar.set_message(format!("{scene_name}: loading"));
             let t = Instant::now();
-            let scene = match load_scene(scene_name, &budget) {
+            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, &budget))
+                .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))));
+            let scene = match loaded {
                 Ok(scene) => scene,
                 Err(e) => {
                     let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "scene" };
@@ -161,9 +165,12 @@ fn load_scene(name: &str, budget: &Budget) -> Result<Scene> {
     if let Some(bytes) = budget::scene_bytes(name) {
         budget.check(format!("scene '{name}'"), bytes, hint)?;
     } else if let Some((base, k)) = scenes::builtin::subdivision(name) {
-        let triangles = scenes::load_scene(base).with_context(|| format!("scene '{base}'"))?.triangle_count() as u64;
+        // The base is loaded once: checked, then subdivided.
+        let base = load_scene(base, budget)?;
+        let triangles = base.triangle_count() as u64;
         let bytes = triangles.saturating_mul(4u64.pow(k)).saturating_mul(budget::SCENE_BYTES_PER_TRIANGLE);
         budget.check(format!("scene '{name}' ({triangles} × 4^{k} triangles)"), bytes, hint)?;
+        return scenes::builtin::subdivided(base, name, k).with_context(|| format!("scene '{name}'"));
     }
     scenes::load_scene(name).with_context(|| format!("scene '{name}'"))
 }

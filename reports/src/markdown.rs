@@ -7,18 +7,13 @@ use crate::merge;
 use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results};
 
-/// Renders the whole report. Scenes appear in the order their first case ran.
 /// The cases that did not run (budget refusals, scenes that did not load, failed builds) and the
 /// renders whose rays reached the kernels' iteration bound; empty when there are none.
 pub fn not_run_section(results: &Results) -> String {
     let mut out = String::new();
     let cell = |s: &str| s.replace('|', "\\|").replace('\n', " ");
     if !results.skipped.is_empty() {
-        let _ = writeln!(
-            out,
-            "## Cases that did not run
-"
-        );
+        let _ = writeln!(out, "## Cases that did not run\n");
         let _ = writeln!(out, "| scene | structure | kind | reason |\n|---|---|---|---|");
         for k in &results.skipped {
             let structure = match &k.variant {
@@ -35,11 +30,7 @@ pub fn not_run_section(results: &Results) -> String {
         .flat_map(|c| c.render.iter().filter(|r| r.rays_at_bound > 0).map(move |r| (c, r)))
         .collect();
     if !bounded.is_empty() {
-        let _ = writeln!(
-            out,
-            "## Rays ended at the iteration bound
-"
-        );
+        let _ = writeln!(out, "## Rays ended at the iteration bound\n");
         let _ = writeln!(
             out,
             "A sound structure never reaches the bound (`kernels::MAX_STEPS`); these rays were ended as misses.\n"
@@ -61,6 +52,7 @@ pub fn not_run_section(results: &Results) -> String {
     out
 }
 
+/// Renders the whole report. Scenes appear in the order their first case ran.
 pub fn report(results: &Results) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# accel-bench report\n");

@@ -34,7 +34,8 @@ pub struct SkippedCase {
     pub structure: String,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub variant: Option<String>,
-    /// `budget` (refused before the work), `scene` (the scene did not load) or `error`.
+    /// `budget` (refused before the work), `scene` (the scene did not load), `error` (the build
+    /// or a render failed) or `panic`.
     pub kind: String,
     pub reason: String,
 }

@@ -60,18 +60,30 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
 /// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
 pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
     if let Some((base, levels)) = subdivision(name) {
-        let mut scene = load_scene(base)?;
-        scene.mesh = crate::subdivide::subdivide(&scene.mesh, levels);
-        scene.provenance = scene.mesh.provenance.clone();
-        let factor = 4u32.pow(levels);
-        for o in &mut scene.objects {
-            o.first_triangle *= factor;
-            o.triangle_count *= factor;
-        }
-        scene.name = name.into();
-        return Ok(scene);
+        return subdivided(load_scene(base)?, name, levels);
     }
     load_unmodified(name)
+}
+
+/// `scene` subdivided `levels` times (4^levels triangles each), renamed `name`; an error when the
+/// result would count past `u32` triangles.
+pub fn subdivided(mut scene: Scene, name: &str, levels: u32) -> Result<Scene, SceneError> {
+    let factor = 4u32.pow(levels);
+    let too_many = || SceneError::UnknownScene {
+        name: name.into(),
+        detail: format!("{} triangles × 4^{levels} passes the 2^32 a mesh can index", scene.triangle_count()),
+    };
+    if u32::try_from(scene.triangle_count()).ok().and_then(|n| n.checked_mul(factor)).is_none() {
+        return Err(too_many());
+    }
+    scene.mesh = crate::subdivide::subdivide(&scene.mesh, levels);
+    scene.provenance = scene.mesh.provenance.clone();
+    for o in &mut scene.objects {
+        o.first_triangle *= factor;
+        o.triangle_count *= factor;
+    }
+    scene.name = name.into();
+    Ok(scene)
 }
 
 /// `base@sub<k>` → (`base`, k). Only `@sub<k>` (k ≤ 6) is a modifier; any other `@` belongs to

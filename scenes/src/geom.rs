@@ -75,9 +75,11 @@ impl Aabb {
 
     /// The box with a well-defined size for framing a camera or fitting a voxel cube: the box
     /// itself when its largest extent is at least 2^-16 of its largest coordinate magnitude and at
-    /// least 2^-40; otherwise (a scene that is a single point, or a triangle 1e-30 across) the box
-    /// grown about its centre to that size, so eye and target differ in f32 and the voxel cube is
-    /// positive. An empty box frames the unit cube at the origin.
+    /// least 2^-40; otherwise the box grown about its centre to that size, so eye and target differ
+    /// in f32 and the voxel cube is positive. That covers a scene that is a single point or a
+    /// triangle 1e-30 across, and also a real but small mesh far from the origin (a 1-unit mesh at
+    /// 1e6 is framed 15 units wide: finer voxels than f32 resolves there would not be exact).
+    /// An empty box frames the unit cube at the origin.
     pub fn framed(&self) -> Aabb {
         if self.is_empty() {
             return Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5));

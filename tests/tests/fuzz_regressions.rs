@@ -1,6 +1,7 @@
-//! Replays every input that ever crashed a fuzz target (tests/fuzz/regressions/<target>/, see
-//! tests/fuzz/Cargo.toml) on stable: each must now end in an error or a valid scene, never a panic.
-//! The targets are mirrored here call for call.
+//! Replays every input that ever crashed a fuzz target (`crash-*` in
+//! tests/fuzz/regressions/<target>/, see tests/fuzz/Cargo.toml), and hand-made hostile inputs of
+//! the same kinds (`hostile-*`), on stable: each must end in an error or a valid scene, never a
+//! panic. The targets are mirrored here call for call.
 
 use std::path::{Path, PathBuf};
 
@@ -39,20 +40,22 @@ fn obj_crashes_stay_fixed() {
 
 #[test]
 fn obj_gz_crashes_stay_fixed() {
-    replay("obj_gz", |b| scene_error(scenes::load::load_bytes("fuzz.obj.gz", b)));
+    let n = replay("obj_gz", |b| scene_error(scenes::load::load_bytes("fuzz.obj.gz", b)));
+    assert!(n > 0, "the corpus holds hostile gzipped OBJs");
 }
 
 #[test]
 fn gltf_crashes_stay_fixed() {
-    replay("gltf", |b| {
+    let n = replay("gltf", |b| {
         let name = if b.starts_with(b"glTF") { "fuzz.glb" } else { "fuzz.gltf" };
         scenes::load::gltf::parse_gltf(name, b, Some(Path::new("/nonexistent-fuzz-dir"))).err().map(|e| e.to_string())
     });
+    assert!(n > 0, "the corpus holds hostile glTF and GLB files");
 }
 
 #[test]
 fn params_crashes_stay_fixed() {
-    replay("params", |b| {
+    let n = replay("params", |b| {
         let text = std::str::from_utf8(b).ok()?;
         let params = structures::Params::parse(text.lines()).ok()?;
         let _ = params.check_keys(&kernels::param_keys(), &["org", "esvo"]);
@@ -61,4 +64,5 @@ fn params_crashes_stay_fixed() {
         }
         None
     });
+    assert!(n > 0, "the corpus holds hostile parameter lists");
 }

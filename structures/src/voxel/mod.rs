@@ -185,7 +185,8 @@ pub fn level_param(params: &crate::Params) -> Result<u32, crate::BuildError> {
 /// About how many voxels a conservative voxelisation of `triangles` at `level` marks, without
 /// voxelising: each triangle covers about `area·(|n_x| + |n_y| + |n_z|)/h²` voxels (its projected
 /// areas in voxel units, `h` the voxel side) plus, once it is longer than a voxel, a band along
-/// its edges (half its perimeter in voxels); triangles smaller than a voxel share voxels with
+/// its edges (its perimeter in voxels: a thin blade covers about a voxel each side of its long
+/// edges); triangles smaller than a voxel share voxels with
 /// their neighbours, so they add only their area. Capped at the grid's `8^level`. O(N); the
 /// budget check (harness) multiplies it by each structure's measured bytes per voxel.
 pub fn estimate_surface_voxels(scene: &scenes::Scene, triangles: &[scenes::Triangle], level: u32) -> f64 {
@@ -198,7 +199,7 @@ pub fn estimate_surface_voxels(scene: &scenes::Scene, triangles: &[scenes::Trian
             let cross = (b - a).cross(c - a);
             let projected = 0.5 * (cross.x.abs() + cross.y.abs() + cross.z.abs());
             let perimeter = (b - a).length() + (c - b).length() + (a - c).length();
-            projected / (h * h) + (0.5 * perimeter / h - 0.5).max(0.0)
+            projected / (h * h) + (perimeter / h - 1.0).max(0.0)
         })
         .sum();
     total.min(8f64.powi(level as i32))
