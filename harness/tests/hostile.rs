@@ -283,3 +283,33 @@ fn a_killed_run_keeps_every_finished_case_and_a_second_run_cannot_overwrite_it()
     assert_eq!(std::fs::read(run.join("results.json")).expect("read"), before, "the first run is untouched");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene a billion units wide (within the ±2^40 supported): the voxel structures see the same
+/// cube as the BVH. With an absolute direction epsilon in octree space every component of every
+/// ray was clamped there and the voxel structures missed everything.
+#[test]
+fn a_scene_a_billion_units_wide_renders_in_every_voxel_structure() {
+    let dir = temp_dir("huge-scene");
+    let s = 1e9;
+    let corners: Vec<String> = (0..8)
+        .map(|i| format!("v {} {} {}", (i & 1) as f64 * s, (i >> 1 & 1) as f64 * s, (i >> 2 & 1) as f64 * s))
+        .collect();
+    let faces =
+        "f 1 2 4\nf 1 4 3\nf 5 7 8\nf 5 8 6\nf 1 5 6\nf 1 6 2\nf 3 4 8\nf 3 8 7\nf 1 3 7\nf 1 7 5\nf 2 6 8\nf 2 8 4\n";
+    let path = dir.join("cube.obj");
+    std::fs::write(&path, format!("{}\n{faces}", corners.join("\n"))).expect("write");
+    let scene = path.to_string_lossy().into_owned();
+    let out = dir.join("run").to_string_lossy().into_owned();
+    let o = harness_within(&run_args(&scene, "bvh,svo-naive,svo,esvo,svdag", &out), Duration::from_secs(120));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let results = read_json(&dir.join("run").join("results.json"));
+    let hits = |c: &serde_json::Value| c["render"][0]["hit_fraction"].as_f64().unwrap_or(0.0);
+    let cases = results["cases"].as_array().expect("cases");
+    let bvh = hits(&cases[0]);
+    assert!(bvh > 0.3, "the cube fills the view: {bvh}");
+    for case in &cases[1..] {
+        // Voxel hits differ from the triangles' only along the silhouette.
+        assert!((hits(case) - bvh).abs() < 0.02, "{}: {} vs the BVH's {bvh}", case["structure"], hits(case));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
