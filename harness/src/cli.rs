@@ -170,8 +170,9 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
     /// Most memory the run may use, e.g. 8G, 512M or bytes (default: the memory the OS reports
-    /// available). Every scene, build and frame is estimated first; a case whose estimate passes
-    /// the limit is skipped with its reason instead of exhausting memory.
+    /// available; a limit given here replaces it, also upwards). Every scene, build and frame is
+    /// estimated first; a case whose estimate (with 1.5× headroom) passes the limit is skipped with
+    /// its reason instead of exhausting memory.
     #[arg(long, value_name = "SIZE", value_parser = crate::budget::parse_size)]
     pub memory_limit: Option<u64>,
     /// Time code even if the harness was compiled without optimisation (numbers are then meaningless).

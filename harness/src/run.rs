@@ -316,10 +316,13 @@ fn measure_case(
         true => budget::build_bytes(REFERENCE, &input),
         false => 0,
     };
-    let label = match params.get::<u32>("voxel.levels", 0) {
+    let mut label = match params.get::<u32>("voxel.levels", 0) {
         Ok(l) if entry.family == "voxel" => format!("building {structure} at level {l} on '{}'", scene.name),
         _ => format!("building {structure} on '{}'", scene.name),
     };
+    if reference_estimate > 0 {
+        label += &format!(" (with the reference {REFERENCE} it is timed against)");
+    }
     budget.check(label, estimate + reference_estimate, budget::build_hint(structure, params))?;
     // Every structure but the reference is timed in alternation with the reference, so that
     // `harness compare` can gate on ratios that machine load cancels out of.
