@@ -25,7 +25,9 @@ pub const SCENE_BYTES_PER_TRIANGLE: u64 = 256;
 
 /// A case's frames: the timed frame, the counted frame and its per-pixel counters, the CPU
 /// primary frame kept for GPU rows and the reference's, the heat map, and both PNG buffers.
-pub const FRAME_BYTES_PER_PIXEL: u64 = 320;
+/// Measured: 116 B per pixel at 1024² (every render row records `peak_bytes` beside this
+/// estimate); the rest is room for the GPU rows' rays (32 B), hits and read-back (16 B each).
+pub const FRAME_BYTES_PER_PIXEL: u64 = 192;
 
 /// Work is refused when its estimate times this passes the allowance. Measured over the built-in
 /// scenes (and the voxel structures at L = 8 and 10), estimate/peak runs from 0.36 (the SVDAG's

@@ -68,6 +68,8 @@ pub fn measure(
         prim_tests_per_ray_mean: 0.0,
         hit_fraction: render.frame.hit_fraction(),
         rays_at_bound: render.rays_at_bound(),
+        peak_bytes: None,
+        estimated_peak_bytes: None,
         agreement: Some(agreement::against_frame(&render.frame, cpu_frame, "cpu")),
         reference_timing: None,
         gpu: Some(GpuStats {

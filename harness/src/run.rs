@@ -392,6 +392,9 @@ fn measure_case(
             }
             let device = &out.results.machine.cpu;
             let reference = paired.and(ctx.reference.as_deref());
+            // The render phase's heap peak (frames, counters, the reference's frame, images), beside
+            // the frame budget's estimate of it.
+            let base = alloc::reset_peak();
             let (mut stats, frame, heat) =
                 timed_renders(accel.as_ref(), reference, &camera, &shade, workload, plan, device);
             if workload == Workload::Primary {
@@ -416,6 +419,8 @@ fn measure_case(
                 }
                 cpu_primary = Some(frame);
             }
+            stats.peak_bytes = Some(alloc::peak_bytes().saturating_sub(base) as u64);
+            stats.estimated_peak_bytes = Some(budget::frame_bytes(camera.width, camera.height));
             case.render.push(stats);
         }
     }
@@ -524,6 +529,8 @@ fn timed_renders(
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),
         rays_at_bound: totals.rays_at_bound,
+        peak_bytes: None,
+        estimated_peak_bytes: None,
         agreement: None,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         gpu: None,

@@ -328,6 +328,12 @@ pub struct RenderStats {
     /// absent when 0, as it is for every sound structure and input.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub rays_at_bound: u64,
+    /// CPU rows: the render phase's heap peak (its frames, counters and images) above what was
+    /// held before it, and the frame budget's estimate of it (harness/src/budget.rs).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub peak_bytes: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub estimated_peak_bytes: Option<u64>,
     pub agreement: Option<Agreement>,
     /// The reference structure's render of the same rays, timed in alternation with this one's
     /// reps (see [`BuildStats::reference_timing`]).
