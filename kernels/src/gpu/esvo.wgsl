@@ -70,6 +70,10 @@ fn occupied_corner(first: u32) -> vec3<f32> {
 fn esvo_cast(ray: Ray, t_min: f32, contours: bool, lod_k: f32) -> CastHit {
     let r = to_octree_space(ray);
     let span = box_span(octree_ray(r.o, r.d), occupied_corner(ESVO_OCCUPIED), occupied_corner(ESVO_OCCUPIED + 3u));
+    // A NaN or inverted span is empty, as on the CPU: max/min below may drop a NaN bound.
+    if (!(t_min <= ray.t_max)) {
+        return octree_cast(r.o, r.d, 1.0, 0.0, contours, lod_k);
+    }
     return octree_cast(r.o, r.d, max(t_min, span.x), min(ray.t_max, span.y), contours, lod_k);
 }
 

@@ -77,5 +77,9 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     let r = to_octree_space(ray);
     // From the entry to the exit of the box the leaves occupy (kernels/src/cpu/svdag.rs).
     let span = box_span(octree_ray(r.o, r.d), occupied_corner(SVDAG_OCCUPIED), occupied_corner(SVDAG_OCCUPIED + 3u));
+    // A NaN or inverted span is empty, as on the CPU: max/min below may drop a NaN bound.
+    if (!(ray.t_min <= ray.t_max)) {
+        return no_hit();
+    }
     return voxel_trace_result(octree_cast(r.o, r.d, max(ray.t_min, span.x), min(ray.t_max, span.y), false, 0.0));
 }
