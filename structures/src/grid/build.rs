@@ -98,12 +98,19 @@ struct Split {
 /// budget needs before a build (a λ or a scene that asks for billions of references is refused,
 /// not attempted). Sub-grids add at most [`MAX_REFS`] references on top.
 pub fn estimate_top(tris: &[Triangle], kind: GridKind) -> (u64, u64) {
+    let (bboxes, bounds, all) = top_input(tris);
+    let h = header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1);
+    (crate::grid::resolution::cells(h.res), count_refs(&h, &all, &bboxes))
+}
+
+/// What the top grid is built from: every triangle's bounding box, their union (a point at the
+/// origin when there are none) and the list of all triangle ids.
+fn top_input(tris: &[Triangle]) -> (Vec<Aabb>, Aabb, Vec<u32>) {
     let bboxes: Vec<Aabb> = tris.par_iter().map(triangle_box).collect();
     let bounds = bboxes.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
     let bounds = if bounds.is_empty() { Aabb::new(Vec3::ZERO, Vec3::ZERO) } else { bounds };
     let all: Vec<u32> = (0..tris.len() as u32).collect();
-    let h = header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1);
-    (crate::grid::resolution::cells(h.res), count_refs(&h, &all, &bboxes))
+    (bboxes, bounds, all)
 }
 
 /// The top grid's resolution: Eq. 1 for UG and RG, (8N)^0.6 cells for RG-2, Algorithm 2 for ORG.
@@ -127,10 +134,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
             detail: format!("{} triangles; at most 2^31", tris.len()),
         });
     }
-    let bboxes: Vec<Aabb> = tris.par_iter().map(triangle_box).collect();
-    let bounds = bboxes.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
-    let bounds = if bounds.is_empty() { Aabb::new(Vec3::ZERO, Vec3::ZERO) } else { bounds };
-    let all: Vec<u32> = (0..tris.len() as u32).collect();
+    let (bboxes, bounds, all) = top_input(tris);
 
     // The top grid.
     let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, &bboxes, true);
