@@ -8,6 +8,9 @@
 //! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |
 //! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | `gpu/esvo.wgsl` (over `gpu/octree_cast.wgsl`; beam pre-pass `esvo_beam`) |
 //! | `svdag` | [`cpu::svdag`] (over [`cpu::octree_cast`]) | `gpu/svdag.wgsl` (over `gpu/octree_cast.wgsl`) |
+//! | `obvhs` | [`cpu::obvhs`] (the crate's own BVH2 traversal) | — |
+//! | `cwbvh` | [`cpu::obvhs`] (the crate's own CWBVH traversal) | `gpu/cwbvh.wgsl` |
+//! | `embree` | [`cpu::embree`] (Embree 3, loaded at run time) | — |
 //!
 //! Both triangle kernels share `gpu/triangle.wgsl` (the watertight test of [`cpu::triangle`]) and
 //! `gpu/slab.wgsl` ([`cpu::slab`]); the voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
@@ -61,4 +64,49 @@ pub trait Traverse: Send + Sync {
     fn gpu_program(&self, _camera: &Camera) -> Option<gpu::GpuProgram<'_>> {
         None
     }
+    /// Which of [`Counters`]' per-ray counts the counting path really counts. A library's own
+    /// traversal (obvhs, Embree) exposes no steps or node visits; the report shows a dash there
+    /// rather than a zero.
+    fn counted(&self) -> Counted {
+        Counted::ALL
+    }
+    /// Rays a packet traversal casts together (Embree's `rtcIntersect8/16`); 1: one at a time.
+    /// Above 1, the renderer casts a tile's primary rays through [`Traverse::intersect_packet`].
+    fn packet_width(&self) -> usize {
+        1
+    }
+    /// Nearest hits of `rays` (each with its own `t_min`, all with `t_max` = ∞), written to `hits`;
+    /// the renderer calls it with whole tiles when [`Traverse::packet_width`] is above 1.
+    fn intersect_packet(&self, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
+        for ((ray, &t0), hit) in rays.iter().zip(t_min).zip(hits.iter_mut()) {
+            *hit = self.intersect(ray, t0, f32::INFINITY);
+        }
+    }
+}
+
+/// What a structure's counting path counts (see [`Traverse::counted`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counted {
+    /// Loop iterations, node visits, pushes and pops.
+    pub steps: bool,
+    /// Ray/primitive tests.
+    pub prim_tests: bool,
+}
+
+impl Counted {
+    pub const ALL: Counted = Counted { steps: true, prim_tests: true };
+    pub const PRIM_TESTS_ONLY: Counted = Counted { steps: false, prim_tests: true };
+    pub const NOTHING: Counted = Counted { steps: false, prim_tests: false };
+}
+
+/// Whether a ray has a defined answer: finite origin and direction, a non-zero direction and a
+/// non-empty span. Kernels that hand rays to a library (obvhs, Embree) end the others at once as
+/// a miss, as every kernel of ours does (`tests/tests/hostile_rays.rs`).
+#[inline(always)]
+pub fn ray_is_traceable(ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    ray.origin.is_finite()
+        && ray.dir.is_finite()
+        && ray.dir != Vec3::ZERO
+        && !t_min.is_nan()
+        && !cpu::octree_ray::span_is_empty(t_min, t_max)
 }

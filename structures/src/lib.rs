@@ -13,11 +13,15 @@
 //! | [`svo_naive`], [`svo`] | the plain SVO baselines | §4.2, seeds 004, 001 |
 //! | [`esvo`] | Laine & Karras ESVO | §4.3, seed 000 |
 //! | [`svdag`] | sparse voxel DAG: bottom-up merge, sub-DAG streaming build | §4.4, seed 001 |
+//! | [`obvhs`] | the obvhs crate's own BVH2 and CWBVH, as shipped (`obvhs`, `cwbvh` rows) | issue 14 |
+//! | [`embree`] | Embree 3, loaded at run time (`embree` row) | §2, issue 14 |
 
 pub mod bvh;
+pub mod embree;
 pub mod esvo;
 pub mod grid;
 pub mod memory;
+pub mod obvhs;
 pub mod params;
 pub mod svdag;
 pub mod svo;
@@ -60,4 +64,8 @@ pub enum BuildError {
     BadParam { key: String, detail: String },
     #[error("{structure}: {detail}")]
     Limit { structure: &'static str, detail: String },
+    /// The structure needs something this machine lacks (Embree's library); not a failure of the
+    /// run: the harness lists the case as skipped with `detail` (which says how to get it).
+    #[error("{structure} is not available here: {detail}")]
+    Unavailable { structure: &'static str, detail: String },
 }

@@ -3,8 +3,10 @@
 
 pub mod brute_force;
 pub mod bvh;
+pub mod embree;
 pub mod esvo;
 pub mod grid;
+pub mod obvhs;
 pub mod octree_cast;
 pub mod octree_ray;
 pub mod render;

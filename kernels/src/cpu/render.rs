@@ -193,6 +193,26 @@ fn render_tiles(
     };
     let start = |x: u32, y: u32| starts.as_ref().map_or(0.0, |s| s[(y * w + x) as usize]);
     match counters {
+        // A packet tracer casts each tile's primary rays together (neighbouring pixels, the
+        // coherence packets exploit); secondary rays stay one at a time.
+        None if accel.packet_width() > 1 => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
+            let mut rays = Vec::with_capacity(TILE_PIXELS);
+            let mut t_min = Vec::with_capacity(TILE_PIXELS);
+            let mut slots = Vec::with_capacity(TILE_PIXELS);
+            for i in 0..out.len() {
+                let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
+                if x < w && y < h {
+                    rays.push(camera.ray(x, y));
+                    t_min.push(start(x, y));
+                    slots.push((i, x, y));
+                }
+            }
+            let mut hits = vec![None; rays.len()];
+            accel.intersect_packet(&rays, &t_min, &mut hits);
+            for ((&(i, x, y), ray), hit) in slots.iter().zip(&rays).zip(hits) {
+                out[i] = shade_hit(accel, camera, ctx, workload, x, y, ray, hit, &mut None);
+            }
+        }),
         None => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
             for (i, s) in out.iter_mut().enumerate() {
                 let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
@@ -253,7 +273,24 @@ fn shade_pixel(
     mut counters: Option<&mut Counters>,
 ) -> Sample {
     let ray = camera.ray(x, y);
-    let Some(hit) = cast(accel, &ray, t_start, f32::INFINITY, &mut counters) else {
+    let hit = cast(accel, &ray, t_start, f32::INFINITY, &mut counters);
+    shade_hit(accel, camera, ctx, workload, x, y, &ray, hit, &mut counters)
+}
+
+/// The sample of pixel `(x, y)` whose primary `ray` found `hit`: casts its secondary rays.
+#[allow(clippy::too_many_arguments)]
+fn shade_hit(
+    accel: &dyn Traverse,
+    camera: &Camera,
+    ctx: &ShadeContext,
+    workload: Workload,
+    x: u32,
+    y: u32,
+    ray: &Ray,
+    hit: Option<crate::Hit>,
+    counters: &mut Option<&mut Counters>,
+) -> Sample {
+    let Some(hit) = hit else {
         return Sample::MISS;
     };
     // Face the normal towards the viewer so secondary rays leave on the visible side.
@@ -264,7 +301,7 @@ fn shade_pixel(
         Workload::Shadow => {
             let to_light = ctx.light - p;
             let lambert = n.dot(to_light.normalize_or_zero()).max(0.0);
-            let blocked = occluded(accel, &Ray::new(p, to_light), 1.0 - 1e-4, &mut counters);
+            let blocked = occluded(accel, &Ray::new(p, to_light), 1.0 - 1e-4, counters);
             if blocked { 0.0 } else { lambert }
         }
         Workload::Ao { samples } => {
@@ -276,7 +313,7 @@ fn shade_pixel(
                     // Cosine-weighted hemisphere direction (Malley's method).
                     let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
                     let dir = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                    !occluded(accel, &Ray::new(p, dir), ctx.ao_radius, &mut counters)
+                    !occluded(accel, &Ray::new(p, dir), ctx.ao_radius, counters)
                 })
                 .count();
             open as f32 / samples.max(1) as f32

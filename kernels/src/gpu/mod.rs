@@ -14,10 +14,13 @@
 //! `grid.wgsl` ([`grid`], shared by UG, RG, RG-2 and ORG), both over the shared watertight triangle
 //! test `triangle.wgsl` and slab test `slab.wgsl`; `svo_naive.wgsl`, `svo.wgsl` and `esvo.wgsl`
 //! ([`voxel`]), over the mirrored-frame set-up `octree_ray.wgsl` and, for the last two, the shared
-//! Laine–Karras caster `octree_cast.wgsl` (the WGSL twin of `cpu::octree_cast`). Voxel kernels
+//! Laine–Karras caster `octree_cast.wgsl` (the WGSL twin of `cpu::octree_cast`); `cwbvh.wgsl`
+//! ([`cwbvh`]), Ylitie et al.'s compressed-wide-BVH traversal over the obvhs crate's own node words
+//! with the crate's Möller–Trumbore test (the GPU row of the `cwbvh` reference). Voxel kernels
 //! return the hit's `t` and Morton code; like the triangle kernels they read no shading attributes.
 
 pub(crate) mod bvh;
+pub(crate) mod cwbvh;
 pub mod dispatch;
 pub(crate) mod grid;
 pub mod program;
