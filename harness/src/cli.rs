@@ -59,7 +59,7 @@ pub enum ListWhat {
 pub enum Preset {
     /// A few small scenes at 256×256: a smoke test in seconds.
     Quick,
-    /// Every built-in scene except the two largest dragons, at 256×256, on one worker thread:
+    /// Every built-in scene except the two largest dragons, every structure but embree, at 256×256, on one worker thread:
     /// small enough for CI, and timing ratios that do not depend on how many cores a shared runner
     /// leaves free (the baseline of `harness compare` in `.ci/run`).
     Ci,
@@ -287,7 +287,11 @@ impl Preset {
 
     fn structures(self) -> Vec<String> {
         let list: Vec<&str> = match self {
-            Preset::Quick | Preset::Ci | Preset::Default => kernels::STRUCTURES.iter().map(|s| s.name).collect(),
+            Preset::Quick | Preset::Default => kernels::STRUCTURES.iter().map(|s| s.name).collect(),
+            // Not `embree`: its BVH (4- or 8-wide) and its triangle test's rounding follow the
+            // CPU's instruction set, so its bytes and agreement counts are not deterministic across
+            // machines of one kind, which the gate assumes. Its tests run in CI all the same.
+            Preset::Ci => kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree").collect(),
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],

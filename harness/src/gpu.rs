@@ -72,6 +72,7 @@ pub fn measure(
         estimated_peak_bytes: None,
         agreement: Some(agreement::against_frame(&render.frame, cpu_frame, "cpu")),
         reference_timing: None,
+        uncounted: Vec::new(),
         gpu: Some(GpuStats {
             adapter: info.name.clone(),
             driver: info.driver.clone(),

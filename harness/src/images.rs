@@ -16,7 +16,12 @@ pub fn write_case_images(dir: &Path, stem: &str, frame: &Frame, steps: &[f32]) -
     let scale = sorted.get(sorted.len() * 99 / 100).copied().unwrap_or(1.0).max(1.0);
     let heat: Vec<u8> = steps.iter().flat_map(|&s| heat_rgb(f64::from(s), f64::from(scale))).collect();
     let mut written = Vec::new();
-    for (name, rgb) in [(format!("{stem}.png"), shaded), (format!("{stem}__steps.png"), heat)] {
+    let mut images = vec![(format!("{stem}.png"), shaded)];
+    // No heat map for a kernel that counts no steps (`steps` is empty then).
+    if !steps.is_empty() {
+        images.push((format!("{stem}__steps.png"), heat));
+    }
+    for (name, rgb) in images {
         let path = dir.join(&name);
         write_png(&path, frame.width, frame.height, &rgb).with_context(|| format!("writing {}", path.display()))?;
         written.push(format!("images/{name}"));

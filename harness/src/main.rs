@@ -69,6 +69,9 @@ fn list(what: ListWhat) {
         println!("structures:");
         for s in kernels::STRUCTURES {
             println!("  {:<10} {:<9} {}", s.name, s.family, s.summary);
+            if let Err(why) = (s.available)() {
+                println!("  {:<10} {:<9} unavailable here: {why}", "", "");
+            }
         }
     }
     if all || what == ListWhat::Backends {
@@ -83,7 +86,9 @@ fn list(what: ListWhat) {
     if all || what == ListWhat::Presets {
         println!("presets:");
         println!("  quick      bunny, teapot, dragon-11k, menger, flat at 256×256");
-        println!("  ci         every built-in scene but dragon and dragon-203k, at 256×256, one thread (the CI gate)");
+        println!(
+            "  ci         every built-in scene but dragon and dragon-203k, every structure but embree, at 256×256, one thread (the CI gate)"
+        );
         println!("  default    every built-in scene at 512×512, every structure (the default)");
         println!("  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on grass-1k…100k");
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");

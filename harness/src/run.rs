@@ -120,7 +120,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                         out.push_case(case)?;
                     }
                     Ok(Err(e)) => {
-                        let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "error" };
+                        let kind = failure_kind(&e);
                         let reason = format!("{e:#}");
                         bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
                         out.push_skipped(skipped(scene_name, structure, variant, kind, &reason))?;
@@ -150,8 +150,9 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
             eprintln!("  {} {} [{}]: {}", k.scene, k.structure, k.kind, k.reason);
         }
     }
-    // Budget refusals are the run working as asked; anything else is a failure to report.
-    let failed = skipped.iter().filter(|k| k.kind != "budget").count();
+    // Budget refusals are the run working as asked, and a structure this machine lacks (Embree)
+    // is not the run's failure; anything else is a failure to report.
+    let failed = skipped.iter().filter(|k| k.kind != "budget" && k.kind != "unavailable").count();
     if failed > 0 {
         bail!("{failed} cases failed (listed above, in results.json's `skipped` and in the report)");
     }
@@ -173,6 +174,18 @@ fn load_scene(name: &str, budget: &Budget) -> Result<Scene> {
         return scenes::builtin::subdivided(base, name, k).with_context(|| format!("scene '{name}'"));
     }
     scenes::load_scene(name).with_context(|| format!("scene '{name}'"))
+}
+
+/// How a case that did not run is listed: `budget` (refused to fit), `unavailable` (needs what the
+/// machine lacks, e.g. Embree's library) or `error`.
+fn failure_kind(e: &anyhow::Error) -> &'static str {
+    if e.downcast_ref::<BudgetError>().is_some() {
+        "budget"
+    } else if matches!(e.downcast_ref::<structures::BuildError>(), Some(structures::BuildError::Unavailable { .. })) {
+        "unavailable"
+    } else {
+        "error"
+    }
 }
 
 fn skipped(scene: &str, structure: &str, variant: Option<String>, kind: &str, reason: &str) -> SkippedCase {
@@ -308,6 +321,7 @@ fn measure_case(
     budget: &Budget,
 ) -> Result<Case> {
     let entry = kernels::find_structure(structure).context("unknown structure")?;
+    (entry.available)().map_err(|detail| structures::BuildError::Unavailable { structure: entry.name, detail })?;
     let scene = ctx.scene;
     bar.set_message(format!("{}/{structure}: building", scene.name));
     let input = BuildInput { scene, triangles: ctx.triangles.clone(), params };
@@ -411,7 +425,9 @@ fn measure_case(
                     label = format!("{label}-{}", v.replace(['=', '.', '/'], "_"));
                 }
                 let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
-                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, &heat)?);
+                // No step heat map where the kernel does not count steps (a library's traversal).
+                let heat = if stats.counts_steps() { heat.as_slice() } else { &[] };
+                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, heat)?);
             }
             if workload == Workload::Primary {
                 if structure == REFERENCE && ctx.reference_frame.is_none() {
@@ -534,8 +550,21 @@ fn timed_renders(
         agreement: None,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         gpu: None,
+        uncounted: uncounted(accel.counted()),
     };
     (stats, frame, heat)
+}
+
+/// The names of the counts a kernel does not expose (see `RenderStats::uncounted`).
+fn uncounted(counted: kernels::Counted) -> Vec<String> {
+    let mut names = Vec::new();
+    if !counted.steps {
+        names.push("steps".to_string());
+    }
+    if !counted.prim_tests {
+        names.push("tests".to_string());
+    }
+    names
 }
 
 /// The reference checks the reference against brute force on a pixel sample; every other

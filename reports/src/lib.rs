@@ -10,6 +10,7 @@ pub mod markdown;
 pub mod merge;
 pub mod paper;
 pub mod plots;
+pub mod references;
 pub mod scaling;
 pub mod schema;
 pub mod svdag_tables;

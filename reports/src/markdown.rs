@@ -4,6 +4,7 @@
 use std::fmt::Write;
 
 use crate::merge;
+use crate::references;
 use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results};
 
@@ -159,9 +160,9 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     );
     let _ = writeln!(
         out,
-        "| structure | backend | workload | memory MiB | N_c | N_p | build ms | render ms | Mrays/s | steps/ray | visits/ray | tests/ray | hit % | agreement |"
+        "| structure | backend | workload | memory MiB | N_c | N_p | build ms | render ms | Mrays/s | × bvh | × strongest | steps/ray | visits/ray | tests/ray | hit % | agreement |"
     );
-    let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
+    let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|");
     for case in cases {
         let b = &case.build.timing;
         let label = case.full_name();
@@ -169,7 +170,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
             let t = &r.timing;
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {:.1} | {} | {} | {:.1} | {} |",
+                "| {} | {} | {} | {:.2} | {} | {} | {:.1} [{:.1}–{:.1}] | {:.2} [{:.2}–{:.2}] | {:.2} | {} | {} | {} | {} | {} | {:.1} | {} |",
                 label,
                 r.backend,
                 r.workload,
@@ -183,9 +184,11 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
                 t.ms_min,
                 t.ms_max,
                 r.mrays_per_s,
-                r.steps_per_ray_mean,
+                references::times(references::vs_bvh(cases, case, r)),
+                strongest(cases, case, r),
+                per_ray(r.counts_steps(), r.steps_per_ray_mean),
                 per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
-                per_ray(r.counts_visits(), r.prim_tests_per_ray_mean),
+                per_ray(r.counts_tests(), r.prim_tests_per_ray_mean),
                 100.0 * r.hit_fraction,
                 agreement(r.agreement.as_ref())
             );
@@ -206,6 +209,11 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
         }
         let _ = writeln!(out, "\n");
     }
+}
+
+/// "0.42× embree": the row's speed over the strongest triangle reference of its scene, named.
+pub(crate) fn strongest(cases: &[&Case], case: &Case, r: &crate::schema::RenderStats) -> String {
+    references::vs_strongest(cases, case, r).map_or("—".into(), |s| format!("{:.2}× {}", s.ratio, s.label))
 }
 
 /// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).

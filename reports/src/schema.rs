@@ -345,12 +345,27 @@ pub struct RenderStats {
     /// with the same structure's CPU kernel (`reference` = `cpu`).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub gpu: Option<GpuStats>,
+    /// Counts the structure's kernel does not expose, reported as 0: `steps` (steps, visits,
+    /// pushes, pops) and `tests` (primitive tests). A library's own traversal (obvhs, Embree)
+    /// counts less than ours; absent when everything was counted.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uncounted: Vec<String>,
 }
 
 impl RenderStats {
-    /// Whether node visits and primitive tests were counted (not on the GPU, which counts steps only).
+    /// Whether loop steps were counted.
+    pub fn counts_steps(&self) -> bool {
+        !self.uncounted.iter().any(|u| u == "steps")
+    }
+
+    /// Whether node visits were counted (not on the GPU, which counts steps only).
     pub fn counts_visits(&self) -> bool {
-        self.gpu.is_none()
+        self.gpu.is_none() && self.counts_steps()
+    }
+
+    /// Whether primitive tests were counted (not on the GPU).
+    pub fn counts_tests(&self) -> bool {
+        self.gpu.is_none() && !self.uncounted.iter().any(|u| u == "tests")
     }
 }
 

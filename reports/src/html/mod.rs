@@ -12,6 +12,7 @@ use base64::Engine;
 use crate::markdown::per_ray;
 use crate::merge;
 use crate::plots::{self, Bars};
+use crate::references;
 use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results, Timing};
 
@@ -197,18 +198,36 @@ fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str]) {
     }
     let _ = writeln!(out, "<section id=\"glance\"><h2>At a glance</h2>");
     for (title, value, higher_better) in [
-        ("Mrays/s (first backend and workload; fastest in bold)", Metric::Mrays, true),
+        (
+            "Mrays/s (first backend and workload; fastest in bold; † the strongest triangle reference)",
+            Metric::Mrays,
+            true,
+        ),
+        (
+            "Speed over the strongest triangle reference (fastest of bvh, obvhs, cwbvh, embree on the scene, named in the last column; first backend and workload)",
+            Metric::VsStrongest,
+            true,
+        ),
         ("Memory (smallest in bold)", Metric::Memory, false),
     ] {
         let _ = writeln!(out, "<h3>{title}</h3><div class=\"scroll\"><table>\n<tr><th>scene</th><th>triangles</th>");
         for l in &labels {
             let _ = write!(out, "<th>{}</th>", esc(l));
         }
+        if let Metric::VsStrongest = value {
+            out.push_str("<th class=\"text\">strongest</th>");
+        }
         let _ = writeln!(out, "</tr>");
         for scene in scenes {
             let cases = r.scene_cases(scene);
-            let vals: Vec<Option<f64>> =
-                labels.iter().map(|l| cases.iter().find(|c| &c.label() == l).and_then(|c| value.of(c))).collect();
+            let strongest = cases
+                .iter()
+                .find_map(|c| c.render.first().and_then(|row| references::vs_strongest(&cases, c, row)))
+                .map(|s| s.label);
+            let vals: Vec<Option<f64>> = labels
+                .iter()
+                .map(|l| cases.iter().find(|c| &c.label() == l).and_then(|c| value.of(&cases, c)))
+                .collect();
             let best = vals.iter().flatten().copied().reduce(|a, b| if (a > b) == higher_better { a } else { b });
             let _ = write!(
                 out,
@@ -217,14 +236,21 @@ fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str]) {
                 esc(scene),
                 cases.first().map_or(0, |c| c.triangles)
             );
-            for v in vals {
+            for (label, v) in labels.iter().zip(vals) {
                 match v {
                     Some(v) => {
                         let class = if Some(v) == best { " class=\"best\"" } else { "" };
-                        let _ = write!(out, "<td{class}>{}</td>", value.show(v));
+                        let mark = match value {
+                            Metric::Mrays if strongest.as_ref() == Some(label) => "†",
+                            _ => "",
+                        };
+                        let _ = write!(out, "<td{class}>{}{mark}</td>", value.show(v));
                     }
                     None => out.push_str("<td>—</td>"),
                 }
+            }
+            if let Metric::VsStrongest = value {
+                let _ = write!(out, "<td class=\"text\">{}</td>", esc(strongest.as_deref().unwrap_or("—")));
             }
             let _ = writeln!(out, "</tr>");
         }
@@ -236,13 +262,17 @@ fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str]) {
 #[derive(Clone, Copy)]
 enum Metric {
     Mrays,
+    VsStrongest,
     Memory,
 }
 
 impl Metric {
-    fn of(self, c: &Case) -> Option<f64> {
+    fn of(self, cases: &[&Case], c: &Case) -> Option<f64> {
         match self {
             Metric::Mrays => c.render.first().map(|r| r.mrays_per_s),
+            Metric::VsStrongest => {
+                c.render.first().and_then(|r| references::vs_strongest(cases, c, r)).map(|s| s.ratio)
+            }
             Metric::Memory => Some(c.memory.bytes as f64),
         }
     }
@@ -250,6 +280,7 @@ impl Metric {
     fn show(self, v: f64) -> String {
         match self {
             Metric::Mrays => format!("{v:.2}"),
+            Metric::VsStrongest => format!("{v:.2}×"),
             Metric::Memory => human_bytes(v as u64),
         }
     }
@@ -334,7 +365,9 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(
         out,
         "<div class=\"scroll\"><table>\n<tr><th>structure</th><th class=\"text\">backend/workload</th>\
-         <th>memory</th><th>N_c</th><th>N_p</th><th>build ms</th><th>render ms</th><th>Mrays/s</th><th>steps/ray</th>\
+         <th>memory</th><th>N_c</th><th>N_p</th><th>build ms</th><th>render ms</th><th>Mrays/s</th>\
+         <th title=\"speed over the reference bvh on the same rays, timed in alternation\">× bvh</th>\
+         <th class=\"text\" title=\"speed over the fastest of bvh, obvhs, cwbvh and embree on this scene\">× strongest</th><th>steps/ray</th>\
          <th>visits/ray</th><th>tests/ray</th><th>hit %</th>\
          <th class=\"text\" title=\"what the primary hits were checked against, on how many pixels\">checked vs</th>\
          <th title=\"pixels where one side hits and the other misses / where both hit different triangles\">mismatches</th>\
@@ -348,7 +381,7 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
             let _ = writeln!(
                 out,
                 "<tr><td>{label}</td><td class=\"text\">{}/{}</td><td title=\"{} bytes\">{}</td>\
-                 <td>{}</td><td>{}</td><td>{:.1} [{:.1}–{:.1}]</td><td>{:.2} [{:.2}–{:.2}]</td><td>{:.2}</td><td>{:.1}</td>\
+                 <td>{}</td><td>{}</td><td>{:.1} [{:.1}–{:.1}]</td><td>{:.2} [{:.2}–{:.2}]</td><td>{:.2}</td><td>{}</td><td class=\"text\">{}</td><td>{}</td>\
                  <td>{}</td><td>{}</td><td>{:.1}</td>{}</tr>",
                 esc(&r.backend),
                 esc(&r.workload),
@@ -363,9 +396,11 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
                 t.ms_min,
                 t.ms_max,
                 r.mrays_per_s,
-                r.steps_per_ray_mean,
+                references::times(references::vs_bvh(cases, case, r)),
+                esc(&crate::markdown::strongest(cases, case, r)),
+                per_ray(r.counts_steps(), r.steps_per_ray_mean),
                 per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
-                per_ray(r.counts_visits(), r.prim_tests_per_ray_mean),
+                per_ray(r.counts_tests(), r.prim_tests_per_ray_mean),
                 100.0 * r.hit_fraction,
                 agreement(r.agreement.as_ref())
             );

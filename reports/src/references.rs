@@ -1,0 +1,122 @@
+//! Every speed against two yardsticks (issue 14): our reference `bvh` (the CI gate's, timed in
+//! alternation with each case), and the **strongest triangle reference in the run** — the
+//! fastest of `bvh`, `obvhs`, `cwbvh` and `embree` (any variant) on the same scene, backend,
+//! workload and machine — which is what a user would pick instead.
+//!
+//! Ratios are speed ratios (above 1: faster). A CPU row's ratio to `bvh` comes from the paired
+//! timing (`reference_timing`, the same rays rendered by `bvh` between this case's reps), so
+//! machine load cancels; where there is none (GPU rows, `bvh` itself) it is the ratio of Mrays/s
+//! to the `bvh` row's. The ratio to the strongest is the row's ratio to `bvh` over the
+//! strongest's, so both use the paired timings where they exist.
+
+use crate::schema::{Case, RenderStats};
+
+/// The triangle structures a user would pick instead of ours, fastest first as a rule.
+pub const TRIANGLE_REFERENCES: &[&str] = &["bvh", "obvhs", "cwbvh", "embree"];
+
+/// The structure every case is timed against.
+pub const BVH: &str = "bvh";
+
+/// A render row's speed relative to the strongest reference of its scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Strongest {
+    /// The strongest reference's label (structure and variant).
+    pub label: String,
+    /// This row's speed over the strongest's (1 for the strongest itself).
+    pub ratio: f64,
+}
+
+fn same_row(a: &RenderStats, b: &RenderStats) -> bool {
+    a.backend == b.backend && a.workload == b.workload && a.width == b.width && a.height == b.height
+}
+
+/// The `bvh` row measured beside `r` (same scene, machine, backend, workload and size).
+fn bvh_row<'a>(cases: &[&'a Case], case: &Case, r: &RenderStats) -> Option<&'a RenderStats> {
+    cases
+        .iter()
+        .filter(|c| c.structure == BVH && c.variant.is_none() && c.machine == case.machine && c.scene == case.scene)
+        .flat_map(|c| &c.render)
+        .find(|b| same_row(b, r))
+}
+
+/// Speed of row `r` of `case` over `bvh`'s on the same rays; `None` without a `bvh` row.
+pub fn vs_bvh(cases: &[&Case], case: &Case, r: &RenderStats) -> Option<f64> {
+    if let Some(reference) = &r.reference_timing
+        && reference.ms_median > 0.0
+        && r.timing.ms_median > 0.0
+    {
+        return Some(reference.ms_median / r.timing.ms_median);
+    }
+    let bvh = bvh_row(cases, case, r)?;
+    (bvh.mrays_per_s > 0.0).then(|| r.mrays_per_s / bvh.mrays_per_s)
+}
+
+/// The strongest triangle reference for row `r` of `case`, and `r`'s speed over it.
+pub fn vs_strongest(cases: &[&Case], case: &Case, r: &RenderStats) -> Option<Strongest> {
+    let mut best: Option<(String, f64)> = None;
+    for c in cases.iter().filter(|c| {
+        TRIANGLE_REFERENCES.contains(&c.structure.as_str()) && c.machine == case.machine && c.scene == case.scene
+    }) {
+        for row in c.render.iter().filter(|row| same_row(row, r)) {
+            if let Some(ratio) = vs_bvh(cases, c, row)
+                && best.as_ref().is_none_or(|(_, b)| ratio > *b)
+            {
+                best = Some((c.label(), ratio));
+            }
+        }
+    }
+    let (label, strongest) = best?;
+    let own = vs_bvh(cases, case, r)?;
+    Some(Strongest { label, ratio: own / strongest })
+}
+
+/// "1.27×" for a ratio, "—" for none.
+pub fn times(ratio: Option<f64>) -> String {
+    ratio.map_or("—".into(), |r| format!("{r:.2}×"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::schema::Timing;
+
+    fn case(structure: &str, ms: f64, paired_bvh_ms: Option<f64>, mrays: f64) -> Case {
+        let timing = |ms: f64| Timing { ms_median: ms, ms_min: ms, ms_max: ms, reps: 1, samples_ms: vec![ms] };
+        Case {
+            scene: "s".into(),
+            structure: structure.into(),
+            render: vec![RenderStats {
+                backend: "cpu".into(),
+                workload: "primary".into(),
+                timing: timing(ms),
+                reference_timing: paired_bvh_ms.map(timing),
+                mrays_per_s: mrays,
+                ..Default::default()
+            }],
+            ..Default::default()
+        }
+    }
+
+    /// Paired ratios where they exist; the strongest is the reference with the best ratio to
+    /// `bvh`, whatever its absolute speed in a noisier moment of the run.
+    #[test]
+    fn ratios_follow_the_paired_timings() {
+        let bvh = case("bvh", 10.0, None, 1.0);
+        // Embree: 4 ms against bvh's 12 ms measured beside it (3×), though its Mrays/s reads lower.
+        let embree = case("embree", 4.0, Some(12.0), 0.5);
+        let obvhs = case("obvhs", 5.0, Some(7.5), 9.0);
+        let org = case("org", 20.0, Some(6.0), 0.2);
+        let cases = vec![&bvh, &embree, &obvhs, &org];
+        let r = |c: &Case| c.render[0].clone();
+        assert_eq!(vs_bvh(&cases, &embree, &r(&embree)), Some(3.0));
+        assert_eq!(vs_bvh(&cases, &bvh, &r(&bvh)), Some(1.0));
+        let s = vs_strongest(&cases, &org, &r(&org)).expect("references in the run");
+        assert_eq!(s.label, "embree");
+        assert!((s.ratio - 0.3 / 3.0).abs() < 1e-12, "{}", s.ratio);
+        let own = vs_strongest(&cases, &embree, &r(&embree)).expect("itself");
+        assert_eq!(own.ratio, 1.0);
+        // Without a bvh row and without pairing there is nothing to compare with.
+        let lone = case("org", 20.0, None, 0.2);
+        assert_eq!(vs_bvh(&[&lone], &lone, &r(&lone)), None);
+    }
+}
