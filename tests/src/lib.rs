@@ -164,3 +164,19 @@ pub fn scene_of(name: &str, triangles: &[Triangle]) -> Scene {
     }
     Scene::from_mesh(name, mesh)
 }
+
+/// Builds a registered structure for a test; `None` (with a note on stderr) where the machine
+/// lacks what it needs — Embree's library — unless `ACCEL_BENCH_REQUIRE_EMBREE=1` (CI), where
+/// that is a failure like any other build error.
+pub fn build_entry(entry: &kernels::StructureEntry, input: &structures::BuildInput) -> Option<Box<dyn kernels::Accel>> {
+    match (entry.build)(input) {
+        Ok(accel) => Some(accel),
+        Err(structures::BuildError::Unavailable { detail, .. })
+            if std::env::var(structures::embree::ffi::REQUIRE_ENV).as_deref() != Ok("1") =>
+        {
+            eprintln!("{}: skipped, {detail}", entry.name);
+            None
+        }
+        Err(e) => panic!("{}: {e}", entry.name),
+    }
+}
