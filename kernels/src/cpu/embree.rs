@@ -3,16 +3,21 @@
 //! neighbouring pixels when `embree.packet` is 8 or 16 (the renderer hands whole tiles to
 //! [`Traverse::intersect_packet`]). Embree counts nothing for us: [`Counted::NOTHING`].
 
+use glam::Vec3;
 use scenes::Ray;
 use structures::embree::Embree;
-use structures::embree::ffi::PacketRay;
+use structures::embree::ffi::{EmbreeHit, PacketRay};
 
-use super::triangle::geometric_normal;
 use crate::{Counted, Counters, Hit, Traverse, ray_is_traceable};
 
-fn hit(embree: &Embree, found: Option<(f32, u32)>) -> Option<Hit> {
-    let (t, prim) = found?;
-    Some(Hit { t, normal: geometric_normal(&embree.triangles[prim as usize]), prim: u64::from(prim) })
+/// Our hit record from Embree's: the normal from Embree's own `Ng`, turned to our orientation
+/// ((v1 − v0) × (v2 − v0), as `cpu::triangle::geometric_normal`) and normalised. Reading the scene's
+/// triangle instead would cost a cache miss per hit that Embree's own loop never pays (measured:
+/// 15 % of the row's time on the dragon at 1024²).
+#[inline]
+fn hit(found: Option<EmbreeHit>) -> Option<Hit> {
+    let h = found?;
+    Some(Hit { t: h.t, normal: (-Vec3::from_array(h.ng)).normalize_or_zero(), prim: u64::from(h.prim) })
 }
 
 impl Traverse for Embree {
@@ -21,7 +26,7 @@ impl Traverse for Embree {
         if !ray_is_traceable(ray, t_min, t_max) {
             return None;
         }
-        hit(self, self.scene.intersect1(ray.origin.to_array(), ray.dir.to_array(), t_min, t_max))
+        hit(self.scene.intersect1(ray.origin.to_array(), ray.dir.to_array(), t_min, t_max))
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, _counters: &mut Counters) -> Option<Hit> {
@@ -44,37 +49,37 @@ impl Traverse for Embree {
             }
             return;
         }
-        let mut lanes: Vec<PacketRay> = Vec::with_capacity(width);
-        let mut slots: Vec<usize> = Vec::with_capacity(width);
+        let mut lanes = [PacketRay { origin: [0.0; 3], dir: [0.0, 0.0, 1.0], t_min: 0.0, t_max: 0.0 }; 16];
+        let mut slots = [0usize; 16];
         let mut found = [None; 16];
         let mut start = 0;
         while start < rays.len() {
             // Gather the next `width` traceable rays; the others miss without a lane.
-            lanes.clear();
-            slots.clear();
-            while start < rays.len() && lanes.len() < width {
+            let mut n = 0;
+            while start < rays.len() && n < width {
                 let (ray, t0) = (&rays[start], t_min[start]);
                 hits[start] = None;
                 if ray_is_traceable(ray, t0, f32::INFINITY) {
-                    lanes.push(PacketRay {
+                    lanes[n] = PacketRay {
                         origin: ray.origin.to_array(),
                         dir: ray.dir.to_array(),
                         t_min: t0,
                         t_max: f32::INFINITY,
-                    });
-                    slots.push(start);
+                    };
+                    slots[n] = start;
+                    n += 1;
                 }
                 start += 1;
             }
-            if lanes.is_empty() {
+            if n == 0 {
                 continue;
             }
             match width {
-                8 => self.scene.intersect_packet::<8>(&lanes, &mut found),
-                _ => self.scene.intersect_packet::<16>(&lanes, &mut found),
+                8 => self.scene.intersect_packet::<8>(&lanes[..n], &mut found),
+                _ => self.scene.intersect_packet::<16>(&lanes[..n], &mut found),
             }
-            for (k, &slot) in slots.iter().enumerate() {
-                hits[slot] = hit(self, found[k]);
+            for (k, &slot) in slots[..n].iter().enumerate() {
+                hits[slot] = hit(found[k]);
             }
         }
     }

@@ -6,13 +6,12 @@
 //! the intersection callback the crate calls once per test. [`Traverse::counted`] says so, and
 //! the report shows a dash for what was not counted.
 
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use obvhs::triangle::Triangle as ObvhsTriangle;
 use scenes::{Camera, Ray};
 use structures::obvhs::{ObvhsBvh2, ObvhsCwbvh};
 
-use super::triangle::geometric_normal;
 use crate::gpu::GpuProgram;
 use crate::{Counted, Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
 
@@ -21,7 +20,10 @@ trait CrateTree {
     fn traverse(&self, ray: ObvhsRay, hit: &mut RayHit, test: impl FnMut(&ObvhsRay, usize) -> f32) -> bool;
     fn triangles(&self) -> &[ObvhsTriangle];
     fn primitive_indices(&self) -> &[u32];
-    fn scene_triangles(&self) -> &[scenes::Triangle];
+    /// The GPU kernel over the tree's words, where there is one.
+    fn program(&self) -> Option<GpuProgram<'_>> {
+        None
+    }
 }
 
 impl CrateTree for ObvhsBvh2 {
@@ -35,12 +37,12 @@ impl CrateTree for ObvhsBvh2 {
     fn primitive_indices(&self) -> &[u32] {
         &self.bvh.primitive_indices
     }
-    fn scene_triangles(&self) -> &[scenes::Triangle] {
-        &self.scene_triangles
-    }
 }
 
 impl CrateTree for ObvhsCwbvh {
+    fn program(&self) -> Option<GpuProgram<'_>> {
+        crate::gpu::cwbvh::program(self)
+    }
     #[inline(always)]
     fn traverse(&self, ray: ObvhsRay, hit: &mut RayHit, test: impl FnMut(&ObvhsRay, usize) -> f32) -> bool {
         self.bvh.ray_traverse(ray, hit, test)
@@ -50,9 +52,6 @@ impl CrateTree for ObvhsCwbvh {
     }
     fn primitive_indices(&self) -> &[u32] {
         &self.bvh.primitive_indices
-    }
-    fn scene_triangles(&self) -> &[scenes::Triangle] {
-        &self.scene_triangles
     }
 }
 
@@ -73,25 +72,14 @@ fn trace<T: CrateTree, S: Stats>(tree: &T, ray: &Ray, t_min: f32, t_max: f32, st
     if !found {
         return None;
     }
-    let prim = tree.primitive_indices()[hit.primitive_id as usize];
-    Some(Hit { t: hit.t, normal: geometric_normal(&tree.scene_triangles()[prim as usize]), prim: u64::from(prim) })
+    let id = hit.primitive_id as usize;
+    // The normal from the crate's copy of the triangle, just tested and so in cache (the scene's
+    // copy would cost a miss per hit that the crate's own loop never pays).
+    let normal = Vec3::from(tris[id].compute_normal());
+    Some(Hit { t: hit.t, normal, prim: u64::from(tree.primitive_indices()[id]) })
 }
 
-impl Traverse for ObvhsBvh2 {
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
-    }
-
-    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
-    }
-
-    fn counted(&self) -> Counted {
-        Counted::PRIM_TESTS_ONLY
-    }
-}
-
-impl Traverse for ObvhsCwbvh {
+impl<T: CrateTree + Send + Sync> Traverse for T {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         trace(self, ray, t_min, t_max, &mut NoStats)
     }
@@ -105,6 +93,6 @@ impl Traverse for ObvhsCwbvh {
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
-        crate::gpu::cwbvh::program(self)
+        self.program()
     }
 }

@@ -45,12 +45,9 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     // A tree enters each node at most once per ray; the guard holds a corrupt one to MAX_STEPS.
     var guard = 0u;
     loop {
-        guard += 1u;
-        if (guard > MAX_STEPS) {
-            count_bound();
+        if (!next_step(&guard)) {
             return no_hit();
         }
-        count_step();
         let n = bvh_node(node);
         if (n.count > 0u) {
             for (var k = n.first; k < n.first + n.count; k++) {

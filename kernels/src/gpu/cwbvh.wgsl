@@ -188,12 +188,9 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     // A tree enters each node at most once per ray; the guard holds a corrupt one to MAX_STEPS.
     var guard = 0u;
     loop {
-        guard += 1u;
-        if (guard > MAX_STEPS) {
-            count_bound();
+        if (!next_step(&guard)) {
             return no_hit();
         }
-        count_step();
         // The triangles of the last node's leaves, highest offset first.
         while (tri_group.y != 0u) {
             let k = firstLeadingBit(tri_group.y);

@@ -167,12 +167,9 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     var cur = enter(r, h, 0u, clip.x);
     var guard = 0u;
     loop {
-        guard += 1u;
-        if (guard > MAX_STEPS) {
-            count_bound();
+        if (!next_step(&guard)) {
             return no_hit();
         }
-        count_step();
         let cell = h.first_cell + cur.cell.x + h.res.x * (cur.cell.y + h.res.y * cur.cell.z);
         let begin = cells(cell);
         let end = cells(cell + 1u);

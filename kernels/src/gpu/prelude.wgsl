@@ -71,6 +71,19 @@ fn count_bound() {
     }
 }
 
+// One more iteration of a loop bounded by its own `guard` (the BVH, CWBVH and grid loops): counts
+// the step, or, past MAX_STEPS, counts the ray as ended at the bound and returns false (the caller
+// then returns a miss).
+fn next_step(guard: ptr<function, u32>) -> bool {
+    *guard += 1u;
+    if (*guard > MAX_STEPS) {
+        count_bound();
+        return false;
+    }
+    count_step();
+    return true;
+}
+
 const MISS_T_BITS: u32 = 0x7f800000u;
 const NO_PRIM: u32 = 0xffffffffu;
 const TILE: u32 = 8u;

@@ -161,7 +161,7 @@ impl Api {
             // name (or the user's explicit path), whose initialisers set up its own state only.
             match unsafe { Library::new(name) } {
                 Ok(library) => return Api::resolve(library, name),
-                Err(e) => errors.push(format!("{name}: {e}")),
+                Err(e) => errors.push(e.to_string()),
             }
         }
         Err(format!("Embree 3 not found ({}); {INSTALL_HINT}", errors.join("; ")))
@@ -389,9 +389,9 @@ impl CommittedScene {
         if last.is_empty() { format!("{call} failed") } else { format!("{call} failed: {last}") }
     }
 
-    /// The nearest hit in `[t_min, t_max]` of one ray: `(t, triangle)`.
+    /// The nearest hit in `[t_min, t_max]` of one ray.
     #[inline]
-    pub fn intersect1(&self, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> Option<(f32, u32)> {
+    pub fn intersect1(&self, origin: [f32; 3], dir: [f32; 3], t_min: f32, t_max: f32) -> Option<EmbreeHit> {
         let mut context = context(RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
         let mut rh = RayHit1 {
             org: origin,
@@ -413,13 +413,13 @@ impl CommittedScene {
         // SAFETY: the scene is committed and live (see the Send/Sync argument); `context` and
         // `rh` are initialised, correctly laid out and aligned, and live for the call.
         unsafe { (self.api.intersect1)(self.scene, &mut context, &mut rh) };
-        (rh.geom_id != RTC_INVALID_GEOMETRY_ID).then_some((rh.tfar, rh.prim_id))
+        (rh.geom_id != RTC_INVALID_GEOMETRY_ID).then_some(EmbreeHit { t: rh.tfar, prim: rh.prim_id, ng: rh.ng })
     }
 
     /// The nearest hits of up to `N` (8 or 16) rays traced as one packet, in order; unused lanes
     /// (`rays.len() < N`) are masked off.
     #[inline]
-    pub fn intersect_packet<const N: usize>(&self, rays: &[PacketRay], out: &mut [Option<(f32, u32)>]) {
+    pub fn intersect_packet<const N: usize>(&self, rays: &[PacketRay], out: &mut [Option<EmbreeHit>]) {
         assert!(N == 8 || N == 16, "Embree packets are 8 or 16 rays");
         assert!(rays.len() <= N && out.len() >= rays.len(), "at most one packet");
         let mut context = context(RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
@@ -475,9 +475,22 @@ impl CommittedScene {
             }
         }
         for (k, o) in out.iter_mut().enumerate().take(rays.len()) {
-            *o = (p.geom_id[k] != RTC_INVALID_GEOMETRY_ID).then_some((p.tfar[k], p.prim_id[k]));
+            *o = (p.geom_id[k] != RTC_INVALID_GEOMETRY_ID).then_some(EmbreeHit {
+                t: p.tfar[k],
+                prim: p.prim_id[k],
+                ng: [p.ng_x[k], p.ng_y[k], p.ng_z[k]],
+            });
         }
     }
+}
+
+/// What Embree reports of a hit: distance, triangle, and its unnormalised geometric normal `Ng`
+/// (Embree's orientation: (v0 − v1) × (v2 − v0), the opposite of (v1 − v0) × (v2 − v0)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmbreeHit {
+    pub t: f32,
+    pub prim: u32,
+    pub ng: [f32; 3],
 }
 
 /// One lane of a packet.
@@ -560,7 +573,17 @@ mod tests {
             expected.push(None);
             rays.push(PacketRay { origin: [0.5, 0.2, 0.0], dir: [0.0, 0.0, 1.0], t_min: 2.5, t_max: f32::INFINITY });
             expected.push(None);
-            let single: Vec<_> = rays.iter().map(|r| scene.intersect1(r.origin, r.dir, r.t_min, r.t_max)).collect();
+            let single: Vec<_> = rays
+                .iter()
+                .map(|r| {
+                    scene.intersect1(r.origin, r.dir, r.t_min, r.t_max).map(|h| {
+                        // Both triangles lie in z = 2, wound counter-clockwise seen from +z:
+                        // (v1 − v0) × (v2 − v0) points to +z, Embree's Ng the other way.
+                        assert!(h.ng[0] == 0.0 && h.ng[1] == 0.0 && h.ng[2] < 0.0, "Ng {:?}", h.ng);
+                        (h.t, h.prim)
+                    })
+                })
+                .collect();
             assert_eq!(single, expected, "rtcIntersect1, robust {robust}");
             for width in [8, 16] {
                 let mut packed = vec![None; rays.len()];
@@ -570,7 +593,9 @@ mod tests {
                         8 => scene.intersect_packet::<8>(chunk, &mut lanes),
                         _ => scene.intersect_packet::<16>(chunk, &mut lanes),
                     }
-                    out.copy_from_slice(&lanes[..chunk.len()]);
+                    for (o, lane) in out.iter_mut().zip(&lanes) {
+                        *o = lane.map(|h| (h.t, h.prim));
+                    }
                 }
                 assert_eq!(packed, expected, "rtcIntersect{width}, robust {robust}");
             }
@@ -584,6 +609,6 @@ mod tests {
             return;
         }
         let scene = CommittedScene::build(&[], SceneOptions { robust: false, quality: 1, threads: 1 }).expect("builds");
-        assert_eq!(scene.intersect1([0.0; 3], [0.0, 0.0, 1.0], 0.0, f32::INFINITY), None);
+        assert!(scene.intersect1([0.0; 3], [0.0, 0.0, 1.0], 0.0, f32::INFINITY).is_none());
     }
 }

@@ -55,7 +55,8 @@ impl EmbreeParams {
 /// A committed Embree scene over the input's triangles.
 pub struct Embree {
     pub scene: ffi::CommittedScene,
-    /// The scene's soup, for the geometric normal of a hit (not counted, as for every triangle structure).
+    /// The scene's soup (not counted, as for every triangle structure; hits take their normal
+    /// from Embree's `Ng`).
     pub triangles: Arc<[Triangle]>,
     pub params: EmbreeParams,
     library: (String, String),

@@ -18,7 +18,6 @@
 //! The kernels (`kernels::cpu::obvhs`) call the crate; nothing in this module is ours but the
 //! wiring, which is the point of the row.
 
-use std::sync::Arc;
 use std::time::Duration;
 
 use ::obvhs::bvh2::Bvh2;
@@ -39,8 +38,6 @@ pub struct ObvhsBvh2 {
     pub bvh: Bvh2,
     /// `triangles[i]` is the scene's triangle `bvh.primitive_indices[i]`.
     pub triangles: Vec<ObvhsTriangle>,
-    /// The scene's soup, for the geometric normal of a hit (not counted, as for every triangle structure).
-    pub scene_triangles: Arc<[Triangle]>,
     pub preset: BvhPreset,
 }
 
@@ -49,7 +46,6 @@ pub struct ObvhsCwbvh {
     pub bvh: CwBvh,
     /// `triangles[i]` is the scene's triangle `bvh.primitive_indices[i]`.
     pub triangles: Vec<ObvhsTriangle>,
-    pub scene_triangles: Arc<[Triangle]>,
     pub preset: BvhPreset,
     /// Longest root-to-leaf path, in nodes (bounds the GPU kernel's stack).
     pub depth: u32,
@@ -73,7 +69,7 @@ impl ObvhsBvh2 {
             build_bvh2_from_tris(&tris, preset.obvhs_params(), &mut Duration::default())
         };
         let triangles = reorder(&tris, &bvh.primitive_indices);
-        Ok(Self { bvh, triangles, scene_triangles: input.triangles.clone(), preset })
+        Ok(Self { bvh, triangles, preset })
     }
 }
 
@@ -101,7 +97,7 @@ impl ObvhsCwbvh {
             });
         }
         let triangles = reorder(&tris, &bvh.primitive_indices);
-        Ok(Self { bvh, triangles, scene_triangles: input.triangles.clone(), preset, depth })
+        Ok(Self { bvh, triangles, preset, depth })
     }
 
     /// The node array as the `u32` words the GPU reads (20 per node, little-endian fields as laid out).
