@@ -47,7 +47,8 @@ pub fn measure(
     }
     let opts = DispatchOptions { warmup: plan.warmup, reps: plan.reps, count_steps: true, split_words: None };
     let Some(render) = render_primary(ctx, accel, camera, &opts)? else {
-        return Ok(Outcome::Skipped("no GPU kernel for this structure yet".into()));
+        // Only the CPU libraries (obvhs's BVH2, Embree) have none.
+        return Ok(Outcome::Skipped("this structure has no GPU kernel (a CPU library)".into()));
     };
     let run = &render.run;
     let info = ctx.adapter_info();

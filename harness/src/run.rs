@@ -605,9 +605,13 @@ fn one_line(case: &Case) -> String {
                 0 => String::new(),
                 n => format!(", {n} rays ended at the step bound"),
             };
+            let steps = match r.counts_steps() {
+                true => format!("{:.1} steps/ray", r.steps_per_ray_mean),
+                false => "steps not counted".into(),
+            };
             format!(
-                "{} {}: {:.2} ms, {:.2} Mrays/s, {:.1} steps/ray{bound}",
-                r.backend, r.workload, r.timing.ms_median, r.mrays_per_s, r.steps_per_ray_mean
+                "{} {}: {:.2} ms, {:.2} Mrays/s, {steps}{bound}",
+                r.backend, r.workload, r.timing.ms_median, r.mrays_per_s
             )
         })
         .collect();
