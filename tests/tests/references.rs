@@ -165,11 +165,31 @@ fn check_scene(scene_name: &str) {
         } else {
             rays.iter().map(|r| accel.intersect(&r.ray, 0.0, f32::INFINITY)).collect()
         };
+        // Where a library hits the triangle brute force hits, its normal is that triangle's
+        // geometric normal (orientation included: Embree's comes from its own `Ng`).
+        let bad_normals: Vec<String> = rays
+            .iter()
+            .zip(&hits)
+            .zip(&answers)
+            .filter_map(|((r, got), (_, set))| {
+                let h = (*got)?;
+                let expected = kernels::cpu::triangle::geometric_normal(&triangles[h.prim as usize]);
+                (set.contains(&h.prim) && expected != glam::Vec3::ZERO && h.normal.dot(expected) < 0.999)
+                    .then(|| format!("{}: triangle {} normal {} vs {expected}", r.kind, h.prim, h.normal))
+            })
+            .collect();
+        if !bad_normals.is_empty() {
+            failures.push(format!(
+                "{name}: {} wrong normals, first: {:?}",
+                bad_normals.len(),
+                &bad_normals[..bad_normals.len().min(3)]
+            ));
+        }
         let mut tally = Tally::default();
         // obvhs's CWBVH traversal enters child boxes from t = 1e-4 (its `cwbvh::node::EPSILON`,
         // whatever the ray's t_min), so it may pass a hit nearer than that: its origin zone.
         let near = if name == "cwbvh" { abs_t.max(1e-4) } else { abs_t };
-        for ((r, got), expected) in rays.iter().zip(hits).zip(&answers) {
+        for ((r, &got), expected) in rays.iter().zip(&hits).zip(&answers) {
             classify(&mut tally, &triangles, (abs_t, near), r, got, expected);
         }
         let label = format!("{name} {:?}", params.iter().collect::<Vec<_>>());

@@ -485,7 +485,7 @@ impl CommittedScene {
 }
 
 /// What Embree reports of a hit: distance, triangle, and its unnormalised geometric normal `Ng`
-/// (Embree's orientation: (v0 − v1) × (v2 − v0), the opposite of (v1 − v0) × (v2 − v0)).
+/// (oriented as (v1 − v0) × (v2 − v0), checked by the tests below and in tests/tests/references.rs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmbreeHit {
     pub t: f32,
@@ -578,8 +578,8 @@ mod tests {
                 .map(|r| {
                     scene.intersect1(r.origin, r.dir, r.t_min, r.t_max).map(|h| {
                         // Both triangles lie in z = 2, wound counter-clockwise seen from +z:
-                        // (v1 − v0) × (v2 − v0) points to +z, Embree's Ng the other way.
-                        assert!(h.ng[0] == 0.0 && h.ng[1] == 0.0 && h.ng[2] < 0.0, "Ng {:?}", h.ng);
+                        // (v1 − v0) × (v2 − v0) points to +z, and so does Embree's Ng.
+                        assert!(h.ng[0] == 0.0 && h.ng[1] == 0.0 && h.ng[2] > 0.0, "Ng {:?}", h.ng);
                         (h.t, h.prim)
                     })
                 })
