@@ -25,7 +25,7 @@ use crate::machine;
 use crate::output::RunOutput;
 
 /// The structure every other one is checked against, and that is checked against brute force.
-const REFERENCE: &str = "bvh";
+const REFERENCE: &str = reports::compare::REFERENCE;
 
 pub fn run(args: &RunArgs, command: String) -> Result<()> {
     check_optimised(args.allow_unoptimized)?;

@@ -78,9 +78,15 @@ pub trait Traverse: Send + Sync {
     /// Nearest hits of `rays` (each with its own `t_min`, all with `t_max` = ∞), written to `hits`;
     /// the renderer calls it with whole tiles when [`Traverse::packet_width`] is above 1.
     fn intersect_packet(&self, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
-        for ((ray, &t0), hit) in rays.iter().zip(t_min).zip(hits.iter_mut()) {
-            *hit = self.intersect(ray, t0, f32::INFINITY);
-        }
+        intersect_each(self, rays, t_min, hits);
+    }
+}
+
+/// [`Traverse::intersect_packet`] one ray at a time: the default, and a packet tracer's answer
+/// when it is configured for single rays.
+pub fn intersect_each<T: Traverse + ?Sized>(accel: &T, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
+    for ((ray, &t0), hit) in rays.iter().zip(t_min).zip(hits.iter_mut()) {
+        *hit = accel.intersect(ray, t0, f32::INFINITY);
     }
 }
 
@@ -107,6 +113,5 @@ pub fn ray_is_traceable(ray: &Ray, t_min: f32, t_max: f32) -> bool {
     ray.origin.is_finite()
         && ray.dir.is_finite()
         && ray.dir != Vec3::ZERO
-        && !t_min.is_nan()
         && !cpu::octree_ray::span_is_empty(t_min, t_max)
 }

@@ -37,7 +37,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "triangle",
         summary: "reference BVH: obvhs PLOC build, flattened to 32-byte nodes, robust ordered traversal",
         params: &["bvh.preset"],
-        check: |p| structures::bvh::BvhPreset::from_params(p).map(drop),
+        check: bvh_preset_check,
         build: build_bvh,
         available: always,
     },
@@ -46,7 +46,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "triangle",
         summary: "the obvhs crate as shipped: its PLOC BVH2 (same build as bvh), its traversal and Möller–Trumbore test",
         params: &["bvh.preset"],
-        check: |p| structures::bvh::BvhPreset::from_params(p).map(drop),
+        check: bvh_preset_check,
         build: |input| Ok(Box::new(structures::obvhs::ObvhsBvh2::build(input)?)),
         available: always,
     },
@@ -55,7 +55,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "triangle",
         summary: "obvhs's compressed 8-wide BVH (Ylitie et al. 2017): the crate's CPU traversal, our WGSL kernel",
         params: &["bvh.preset"],
-        check: |p| structures::bvh::BvhPreset::from_params(p).map(drop),
+        check: bvh_preset_check,
         build: |input| Ok(Box::new(structures::obvhs::ObvhsCwbvh::build(input)?)),
         available: always,
     },
@@ -152,6 +152,11 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
 ];
+
+/// `bvh`, `obvhs` and `cwbvh` share one build and so one parameter, `bvh.preset`.
+fn bvh_preset_check(params: &Params) -> Result<(), BuildError> {
+    structures::bvh::BvhPreset::from_params(params).map(drop)
+}
 
 fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
     Ok(Box::new(structures::bvh::build(input)?))

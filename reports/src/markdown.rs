@@ -185,7 +185,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
                 t.ms_max,
                 r.mrays_per_s,
                 references::times(references::vs_bvh(cases, case, r)),
-                strongest(cases, case, r),
+                references::strongest_cell(cases, case, r),
                 per_ray(r.counts_steps(), r.steps_per_ray_mean),
                 per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
                 per_ray(r.counts_tests(), r.prim_tests_per_ray_mean),
@@ -209,11 +209,6 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
         }
         let _ = writeln!(out, "\n");
     }
-}
-
-/// "0.42× embree": the row's speed over the strongest triangle reference of its scene, named.
-pub(crate) fn strongest(cases: &[&Case], case: &Case, r: &crate::schema::RenderStats) -> String {
-    references::vs_strongest(cases, case, r).map_or("—".into(), |s| format!("{:.2}× {}", s.ratio, s.label))
 }
 
 /// A per-ray mean, or a dash where it was not counted (GPU rows count steps only).

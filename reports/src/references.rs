@@ -9,13 +9,11 @@
 //! to the `bvh` row's. The ratio to the strongest is the row's ratio to `bvh` over the
 //! strongest's, so both use the paired timings where they exist.
 
+use crate::compare::REFERENCE as BVH;
 use crate::schema::{Case, RenderStats};
 
 /// The triangle structures a user would pick instead of ours, fastest first as a rule.
 pub const TRIANGLE_REFERENCES: &[&str] = &["bvh", "obvhs", "cwbvh", "embree"];
-
-/// The structure every case is timed against.
-pub const BVH: &str = "bvh";
 
 /// A render row's speed relative to the strongest reference of its scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,6 +66,12 @@ pub fn vs_strongest(cases: &[&Case], case: &Case, r: &RenderStats) -> Option<Str
     let (label, strongest) = best?;
     let own = vs_bvh(cases, case, r)?;
     Some(Strongest { label, ratio: own / strongest })
+}
+
+/// "0.42× embree": the row's speed over the strongest triangle reference of its scene, named; "—"
+/// without one.
+pub fn strongest_cell(cases: &[&Case], case: &Case, r: &RenderStats) -> String {
+    vs_strongest(cases, case, r).map_or("—".into(), |s| format!("{:.2}× {}", s.ratio, s.label))
 }
 
 /// "1.27×" for a ratio, "—" for none.

@@ -8,7 +8,7 @@ use scenes::Ray;
 use structures::embree::Embree;
 use structures::embree::ffi::{EmbreeHit, PacketRay};
 
-use crate::{Counted, Counters, Hit, Traverse, ray_is_traceable};
+use crate::{Counted, Counters, Hit, Traverse, intersect_each, ray_is_traceable};
 
 /// Our hit record from Embree's: the normal from Embree's own `Ng`, normalised (its orientation,
 /// (v1 − v0) × (v2 − v0), is `cpu::triangle::geometric_normal`'s). Reading the scene's
@@ -44,10 +44,7 @@ impl Traverse for Embree {
     fn intersect_packet(&self, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
         let width = self.params.packet;
         if width == 1 {
-            for ((ray, &t0), hit) in rays.iter().zip(t_min).zip(hits.iter_mut()) {
-                *hit = self.intersect(ray, t0, f32::INFINITY);
-            }
-            return;
+            return intersect_each(self, rays, t_min, hits);
         }
         let mut lanes = [PacketRay { origin: [0.0; 3], dir: [0.0, 0.0, 1.0], t_min: 0.0, t_max: 0.0 }; 16];
         let mut slots = [0usize; 16];

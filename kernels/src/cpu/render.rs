@@ -234,7 +234,7 @@ fn render_tiles(
             let mut slots = [0usize; TILE_PIXELS];
             let mut n = 0;
             for i in 0..TILE_PIXELS {
-                let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                let (x, y) = tile_pixel((x0, y0), i);
                 if x < w && y < h {
                     (rays[n], t_min[n], slots[n]) = (camera.ray(x, y), start(x, y), i);
                     n += 1;
@@ -244,15 +244,14 @@ fn render_tiles(
             accel.intersect_packet(&rays[..n], &t_min[..n], &mut hits[..n]);
             for k in 0..n {
                 let i = slots[k];
-                let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                let (x, y) = tile_pixel((x0, y0), i);
                 out[i] = shade_hit(accel, camera, ctx, workload, x, y, &rays[k], hits[k], &mut None);
             }
         }),
         None => samples.par_chunks_mut(TILE_PIXELS).enumerate().for_each(|(tile, out)| {
-            // The tile's corner once; its pixels by shifts (TILE is a power of two).
             let (x0, y0) = Frame::pixel_of(w, tile * TILE_PIXELS);
             for (i, s) in out.iter_mut().enumerate() {
-                let (x, y) = (x0 + i as u32 % TILE, y0 + i as u32 / TILE);
+                let (x, y) = tile_pixel((x0, y0), i);
                 if x < w && y < h {
                     *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), None);
                 }
@@ -271,6 +270,13 @@ fn render_tiles(
             )
         }
     }
+}
+
+/// Pixel `i` (row-major within the tile) of the tile whose corner is `corner`: the tile's corner
+/// is computed once per tile, its pixels by shifts (TILE is a power of two).
+#[inline(always)]
+fn tile_pixel(corner: (u32, u32), i: usize) -> (u32, u32) {
+    (corner.0 + i as u32 % TILE, corner.1 + i as u32 / TILE)
 }
 
 #[inline]

@@ -397,7 +397,7 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
                 t.ms_max,
                 r.mrays_per_s,
                 references::times(references::vs_bvh(cases, case, r)),
-                esc(&crate::markdown::strongest(cases, case, r)),
+                esc(&references::strongest_cell(cases, case, r)),
                 per_ray(r.counts_steps(), r.steps_per_ray_mean),
                 per_ray(r.counts_visits(), r.node_visits_per_ray_mean),
                 per_ray(r.counts_tests(), r.prim_tests_per_ray_mean),

@@ -21,10 +21,6 @@
 
 pub mod ffi;
 
-use std::sync::Arc;
-
-use scenes::Triangle;
-
 use crate::{BuildError, BuildInput, MemoryReport, Params, Structure};
 
 /// `embree.*` parameters.
@@ -55,9 +51,8 @@ impl EmbreeParams {
 /// A committed Embree scene over the input's triangles.
 pub struct Embree {
     pub scene: ffi::CommittedScene,
-    /// The scene's soup (not counted, as for every triangle structure; hits take their normal
-    /// from Embree's `Ng`).
-    pub triangles: Arc<[Triangle]>,
+    /// Triangles handed to Embree (N_p; Embree exposes no node count).
+    pub triangles: u64,
     pub params: EmbreeParams,
     library: (String, String),
 }
@@ -78,7 +73,7 @@ impl Embree {
             ffi::SceneOptions { robust: params.robust, quality: params.quality, threads: rayon::current_num_threads() };
         let scene = ffi::CommittedScene::build(&vertices, options)
             .map_err(|detail| BuildError::Limit { structure: "embree", detail })?;
-        Ok(Self { scene, triangles: input.triangles.clone(), params, library })
+        Ok(Self { scene, triangles: input.triangles.len() as u64, params, library })
     }
 }
 
@@ -90,7 +85,7 @@ impl Structure for Embree {
     fn memory(&self) -> MemoryReport {
         let buffers = self.scene.buffer_bytes.max(0) as u64;
         let total = self.scene.total_bytes.max(0) as u64;
-        MemoryReport::new(0, self.triangles.len() as u64)
+        MemoryReport::new(0, self.triangles)
             .with("vertex and index buffers", buffers)
             .with("bvh (Embree's memory monitor)", total.saturating_sub(buffers))
     }
