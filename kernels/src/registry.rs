@@ -98,8 +98,8 @@ pub static STRUCTURES: &[StructureEntry] = &[
     StructureEntry {
         name: "org",
         family: "triangle",
-        summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8)",
-        params: &["org.lambda", "org.alpha", "org.gamma", "org.max_depth"],
+        summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8, org.beta counted|level, org.gamma_test reduced|unreduced)",
+        params: &["org.lambda", "org.alpha", "org.gamma", "org.max_depth", "org.beta", "org.gamma_test"],
         check: |p| grid_check("org", p),
         build: |input| build_grid("org", input),
         available: always,

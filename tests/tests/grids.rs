@@ -469,7 +469,7 @@ const KINDS: [GridKind; 4] = [
     GridKind::Ug { lambda: 5.0 },
     GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 },
     GridKind::Rg2,
-    GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 },
+    GridKind::ORG_PAPER,
 ];
 
 const RAYS_PER_SCENE: usize = 10_002;

@@ -10,7 +10,7 @@ use scenes::{Aabb, Triangle};
 use super::layout::{GridHeader, SUBGRID_BIT};
 use super::level::{LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
-use super::{Grid, GridKind, LevelStats};
+use super::{BetaRule, GammaTest, Grid, GridKind, LevelStats};
 use crate::{BuildError, BuildInput};
 
 /// The deepest hierarchy any kind builds (seed 002 §2: MAXDEPTH = 4 × 2 = 8); the kernels'
@@ -37,12 +37,27 @@ impl GridKind {
                 max_depth: params.get(&key("max_depth"), 3)?,
             },
             "rg2" => GridKind::Rg2,
-            "org" => GridKind::Org {
-                lambda: params.get(&key("lambda"), 1.0)?,
-                alpha: params.get(&key("alpha"), 2.0)?,
-                gamma: params.get(&key("gamma"), 16)?,
-                max_depth: params.get(&key("max_depth"), MAX_DEPTH)?,
-            },
+            "org" => {
+                let GridKind::Org { lambda, alpha, gamma, max_depth, beta, gamma_test } = GridKind::ORG_PAPER else {
+                    unreachable!("ORG_PAPER is an Org")
+                };
+                GridKind::Org {
+                    lambda: params.get(&key("lambda"), lambda)?,
+                    alpha: params.get(&key("alpha"), alpha)?,
+                    gamma: params.get(&key("gamma"), gamma)?,
+                    max_depth: params.get(&key("max_depth"), max_depth)?,
+                    beta: params.choice(
+                        &key("beta"),
+                        beta,
+                        &[("counted", BetaRule::Counted), ("level", BetaRule::Level)],
+                    )?,
+                    gamma_test: params.choice(
+                        &key("gamma_test"),
+                        gamma_test,
+                        &[("reduced", GammaTest::Reduced), ("unreduced", GammaTest::Unreduced)],
+                    )?,
+                }
+            }
             _ => return Err(BuildError::BadParam { key: name.into(), detail: "not a grid kind".into() }),
         };
         kind.check()?;
@@ -78,6 +93,8 @@ fn positive(x: f32) -> bool {
 /// A grid under construction: its level grid and which of its cells have sub-grids.
 struct Node {
     level: LevelGrid,
+    /// Triangles given to this grid (N for the top grid, N_i of the parent cell for a sub-grid).
+    input: u64,
     /// `(cell, node index)`, ascending by cell.
     children: Vec<(u32, u32)>,
 }
@@ -87,7 +104,7 @@ struct Split {
     parent: u32,
     cell: u32,
     res: [u32; 3],
-    /// ORG: references at the unreduced resolution (for β).
+    /// ORG with [`BetaRule::Counted`]: references at the unreduced resolution (its β).
     unreduced_refs: u64,
     /// References the sub-grid will hold.
     refs: u64,
@@ -138,7 +155,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
 
     // The top grid.
     let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, &bboxes, true);
-    let mut nodes = vec![Node { level: top, children: Vec::new() }];
+    let mut nodes = vec![Node { level: top, input: all.len() as u64, children: Vec::new() }];
     let mut levels = Vec::new();
     let mut stored_refs = nodes[0].level.refs.len() as u64;
     let mut budget_stop = None;
@@ -147,10 +164,15 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     let mut frontier = 0..1u32;
     loop {
         let depth = nodes[frontier.start as usize].level.header.depth;
+        // The level's pointer ratio: references its grids hold over the triangles given to them.
+        let (held, given) = nodes[frontier.start as usize..frontier.end as usize]
+            .iter()
+            .fold((0u64, 0u64), |(h, g), n| (h + n.level.refs.len() as u64, g + n.input));
+        let level_beta = (held as f64 / given.max(1) as f64).max(1.0);
         let splits: Vec<Split> = frontier
             .clone()
             .into_par_iter()
-            .flat_map_iter(|g| splits_of(kind, g, &nodes[g as usize].level, &bboxes))
+            .flat_map_iter(|g| splits_of(kind, g, &nodes[g as usize].level, &bboxes, level_beta))
             .collect();
         let new_refs: u64 = splits.iter().map(|s| s.refs).sum();
         let splits = if stored_refs + new_refs > MAX_REFS {
@@ -169,11 +191,13 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
                 build_level(header(b, s.res, depth + 1), parent.cell_refs(s.cell as usize), &bboxes, false)
             })
             .collect();
-        levels.push(level_stats(&nodes, frontier.clone(), &splits, kind));
+        levels.push(level_stats(&nodes, frontier.clone(), &splits, kind, level_beta));
         for (i, s) in splits.iter().enumerate() {
             nodes[s.parent as usize].children.push((s.cell, first_new + i as u32));
         }
-        nodes.extend(built.into_iter().map(|level| Node { level, children: Vec::new() }));
+        let inputs: Vec<u64> =
+            splits.iter().map(|s| nodes[s.parent as usize].level.cell_refs(s.cell as usize).len() as u64).collect();
+        nodes.extend(built.into_iter().zip(inputs).map(|(level, input)| Node { level, input, children: Vec::new() }));
         if splits.is_empty() {
             break;
         }
@@ -183,8 +207,9 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     Ok(Grid { kind, headers, cells, refs, triangles: input.triangles.clone(), levels, budget_stop })
 }
 
-/// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions.
-fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb]) -> Vec<Split> {
+/// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions; `level_beta` is
+/// the pointer ratio of `g`'s level (for [`BetaRule::Level`]).
+fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_beta: f64) -> Vec<Split> {
     let h = &level.header;
     let depth = h.depth;
     let mut out = Vec::new();
@@ -203,16 +228,25 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb]) -> Vec<
             }
             GridKind::Rg2 => (depth == 1).then(|| (eq1(extent, 8.0 * n_i), 0)),
             GridKind::Org { lambda, gamma, .. } if f64::from(lambda) * n_i < min_target_for(gamma) => None,
-            GridKind::Org { lambda, alpha, gamma, max_depth } if depth < max_depth => {
-                // β: the references the sub-grid would hold at the unreduced resolution (λ·N_i
-                // cells), counted from the triangles' cell ranges, over the N_i in the cell.
+            GridKind::Org { lambda, alpha, gamma, max_depth, beta, gamma_test } if depth < max_depth => {
                 let mean = mean_extent(refs, bboxes, &b);
                 let unreduced = algorithm2(extent, f64::from(lambda) * n_i, alpha, mean);
-                let count = count_refs(&header(b, unreduced, depth + 1), refs, bboxes);
-                let beta = (count as f64 / n_i).max(1.0);
+                // β: the level's ratio, or counted from the triangles' cell ranges at the
+                // unreduced resolution (λ·N_i cells) over N_i (the count is kept for the report).
+                let (beta, count) = match beta {
+                    BetaRule::Level => (level_beta, 0),
+                    BetaRule::Counted => {
+                        let count = count_refs(&header(b, unreduced, depth + 1), refs, bboxes);
+                        ((count as f64 / n_i).max(1.0), count)
+                    }
+                };
                 let res = algorithm2(extent, f64::from(lambda) * n_i / beta, alpha, mean);
                 // The γ cut-off on the prospective sub-grid's cell count (seed 002 §2).
-                (cells(res) >= u64::from(gamma)).then_some((res, count))
+                let tested = match gamma_test {
+                    GammaTest::Reduced => res,
+                    GammaTest::Unreduced => unreduced,
+                };
+                (cells(tested) >= u64::from(gamma)).then_some((res, count))
             }
             GridKind::Org { .. } => None,
         };
@@ -224,19 +258,31 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb]) -> Vec<
     out
 }
 
-fn level_stats(nodes: &[Node], frontier: std::ops::Range<u32>, splits: &[Split], kind: GridKind) -> LevelStats {
+fn level_stats(
+    nodes: &[Node],
+    frontier: std::ops::Range<u32>,
+    splits: &[Split],
+    kind: GridKind,
+    level_beta: f64,
+) -> LevelStats {
     let grids = &nodes[frontier.start as usize..frontier.end as usize];
     let split_refs: u64 =
         splits.iter().map(|s| nodes[s.parent as usize].level.cell_refs(s.cell as usize).len() as u64).sum();
     let all_refs: u64 = grids.iter().map(|n| n.level.refs.len() as u64).sum();
-    let beta = matches!(kind, GridKind::Org { .. }) && split_refs > 0;
+    let beta = match kind {
+        GridKind::Org { beta: BetaRule::Counted, .. } if split_refs > 0 => {
+            Some(splits.iter().map(|s| s.unreduced_refs).sum::<u64>() as f64 / split_refs as f64)
+        }
+        GridKind::Org { beta: BetaRule::Level, .. } if split_refs > 0 => Some(level_beta),
+        _ => None,
+    };
     LevelStats {
         depth: grids[0].level.header.depth,
         grids: grids.len() as u64,
         cells: grids.iter().map(|n| u64::from(n.level.header.cell_count())).sum(),
         refs: all_refs - split_refs,
         subdivided_cells: splits.len() as u64,
-        beta: beta.then(|| splits.iter().map(|s| s.unreduced_refs).sum::<u64>() as f64 / split_refs as f64),
+        beta,
     }
 }
 

@@ -41,8 +41,44 @@ pub enum GridKind {
     /// Two-level grid: `(8N)^0.6` top-level cells, `8·N_2` cells in every non-empty one.
     Rg2,
     /// Optimized recursive grid: Algorithms 1–2 with `alpha`, sub-grids of λ·N_i/β cells, no
-    /// subdivision when the prospective sub-grid has fewer than `gamma` cells, `max_depth` levels.
-    Org { lambda: f32, alpha: f32, gamma: u32, max_depth: u32 },
+    /// subdivision when the prospective sub-grid has fewer than `gamma` cells, `max_depth` levels;
+    /// `beta` and `gamma_test` say how the two ambiguous rules of seed 002 §2 are read.
+    Org { lambda: f32, alpha: f32, gamma: u32, max_depth: u32, beta: BetaRule, gamma_test: GammaTest },
+}
+
+/// Where ORG's pointer ratio β (seed 002 §2) comes from. The paper gives two: its derivation
+/// reduces level k+1 by the ratio level k produced ("G_1 holds βN pointers … level 2's λβN cells
+/// become λN"), and its definition is a per-cell ratio "pointers in the cell's sub-grid over the
+/// pointers in the cell" (stated inverted; DESIGN.md §4.5), which needs the sub-grid before its
+/// resolution is known.
+///
+/// **The default is [`BetaRule::Level`] with [`GammaTest::Reduced`]**, because it reproduces the
+/// paper's counts: on the 871K dragon it builds N_c = 1,570.9 K cells and N_p = 3,644.5 K
+/// references, Table 1's dragon row has 1,569.9 K and 3,639.5 K (both within 0.15 %). The other
+/// readings give 1,096.7 K / 2,255.7 K (counted, reduced: hardly a second level, 8 K cells
+/// subdivided), 1,751.6 K / 4,152.8 K (counted, unreduced) and 1,955.3 K / 4,826.0 K (level,
+/// unreduced); both unreduced readings end in chains of one-cell sub-grids down to MAXDEPTH, which
+/// the paper's "resolution falls level by level, so the cut-off is always reached" rules out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BetaRule {
+    /// Per cell: the references the sub-grid would hold at the unreduced resolution λ·N_i,
+    /// counted from the triangles' cell ranges, over N_i.
+    Counted,
+    /// Per level: the references the parent level's grids hold over the triangles given to
+    /// them (the top grid's N_p/N for level 2), the ratio of the paper's derivation.
+    Level,
+}
+
+/// Which prospective sub-grid the γ cut-off is applied to (seed 002 §2: "first compute with which
+/// resolution the sub-grid would be created; if it has fewer than γ cells, do not subdivide").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GammaTest {
+    /// The sub-grid as it will be built, λ·N_i/β cells.
+    Reduced,
+    /// The sub-grid before the β reduction, λ·N_i cells (β then only sets the resolution).
+    Unreduced,
 }
 
 impl GridKind {
@@ -54,6 +90,17 @@ impl GridKind {
             GridKind::Org { .. } => "org",
         }
     }
+
+    /// ORG with the paper's defaults (λ = 1, α = 2, γ = 16, MAXDEPTH = 8; DESIGN.md §4.5) and the
+    /// readings `org` builds by default.
+    pub const ORG_PAPER: GridKind = GridKind::Org {
+        lambda: 1.0,
+        alpha: 2.0,
+        gamma: 16,
+        max_depth: build::MAX_DEPTH,
+        beta: BetaRule::Level,
+        gamma_test: GammaTest::Reduced,
+    };
 }
 
 /// What one level of the hierarchy holds, for the report (seed 002 §2's per-level accounting).
@@ -67,8 +114,10 @@ pub struct LevelStats {
     pub refs: u64,
     /// Cells of this level refined into sub-grids.
     pub subdivided_cells: u64,
-    /// ORG: the pointer ratio β of the sub-grids made from this level's cells, as references at
-    /// the unreduced resolution over the triangles of the subdivided cells (counted, not guessed).
+    /// ORG: the pointer ratio β that reduced the sub-grids made from this level's cells: the
+    /// level's own references over the triangles given to it ([`BetaRule::Level`]), or the
+    /// sub-grids' references at the unreduced resolution over the triangles of the subdivided
+    /// cells ([`BetaRule::Counted`]); counted, not guessed.
     pub beta: Option<f64>,
 }
 

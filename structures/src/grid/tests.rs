@@ -14,7 +14,7 @@ const KINDS: [GridKind; 4] = [
     GridKind::Ug { lambda: 5.0 },
     GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 },
     GridKind::Rg2,
-    GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 },
+    GridKind::ORG_PAPER,
 ];
 
 fn grid(scene: &str, kind: GridKind) -> (scenes::Scene, Grid) {
@@ -87,7 +87,7 @@ fn ug_is_one_level_at_eq1() {
 
 #[test]
 fn org_top_level_follows_algorithm2_and_subgrids_respect_gamma() {
-    let org = GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 };
+    let org = GridKind::ORG_PAPER;
     let (scene, g) = grid("bunny", org);
     let tris = scene.triangles();
     let mean = tris.iter().map(|t| Aabb::from_points(t.iter().copied()).extent()).sum::<Vec3>() / tris.len() as f32;
@@ -100,6 +100,55 @@ fn org_top_level_follows_algorithm2_and_subgrids_respect_gamma() {
     for level in &g.levels[..g.levels.len() - 1] {
         let beta = level.beta.expect("β recorded where cells were subdivided");
         assert!(beta >= 1.0, "β = {beta}");
+    }
+}
+
+/// The distinct triangles in the leaves under grid `h` (for a sub-grid: its parent cell's list).
+fn triangles_under(g: &Grid, h: u32) -> Vec<u32> {
+    let header = &g.headers[h as usize];
+    let first = header.first_cell as usize;
+    let mut out = Vec::new();
+    for r in &g.refs[g.cells[first] as usize..g.cells[first + header.cell_count() as usize] as usize] {
+        if r & SUBGRID_BIT != 0 {
+            out.extend(triangles_under(g, r & !SUBGRID_BIT));
+        } else {
+            out.push(*r);
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+#[test]
+fn org_reduces_each_sub_grid_by_its_levels_pointer_ratio() {
+    // Seed 002 §2's derivation, the default reading: a level-2 sub-grid over a cell of N_i
+    // triangles gets Algorithm 2's resolution for λ·N_i/β cells, β = the top grid's references
+    // (the subdivided cells' lists included) over N.
+    for name in ["dragon-48k", "city", "terrain"] {
+        let (scene, g) = grid(name, GridKind::ORG_PAPER);
+        let subs: Vec<u32> = (1..g.headers.len() as u32).filter(|&h| g.headers[h as usize].depth == 2).collect();
+        assert!(!subs.is_empty(), "{name} subdivides");
+        let lists: Vec<Vec<u32>> = subs.iter().map(|&h| triangles_under(&g, h)).collect();
+        let top_refs = g.levels[0].refs + lists.iter().map(|l| l.len() as u64).sum::<u64>();
+        let beta = top_refs as f64 / scene.triangle_count() as f64;
+        assert_eq!(g.levels[0].beta, Some(beta));
+        let tris = scene.triangles();
+        for (&h, list) in subs.iter().zip(&lists) {
+            let header = &g.headers[h as usize];
+            let cell = Aabb::new(header.min(), header.max());
+            let mean = list
+                .iter()
+                .map(|&t| {
+                    let b = Aabb::from_points(tris[t as usize].iter().copied());
+                    (b.max.min(cell.max) - b.min.max(cell.min)).max(Vec3::ZERO)
+                })
+                .sum::<Vec3>()
+                / list.len() as f32;
+            let expected = algorithm2(cell.extent(), list.len() as f64 / beta, 2.0, mean);
+            assert_eq!(header.res, expected, "{name}: sub-grid {h} over {} triangles", list.len());
+            assert!(cells(expected) >= 16, "γ applies to the reduced sub-grid");
+        }
     }
 }
 
@@ -157,7 +206,7 @@ fn builds_are_deterministic() {
     let scene = scenes::load_scene("dragon-11k").expect("loads");
     let params = Params::default();
     let input = BuildInput { scene: &scene, triangles: Arc::clone(&scene.triangles()), params: &params };
-    let kind = GridKind::Org { lambda: 1.0, alpha: 2.0, gamma: 16, max_depth: 8 };
+    let kind = GridKind::ORG_PAPER;
     let a = build(&input, kind).expect("builds");
     let b = build(&input, kind).expect("builds");
     assert!(a.headers == b.headers && a.cells == b.cells && a.refs == b.refs);
