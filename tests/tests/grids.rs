@@ -90,15 +90,7 @@ fn hand_grid(triangles: &[Triangle], min: Vec3, max: Vec3, spec: &Spec) -> Grid 
         cells.push(refs.len() as u32);
         headers.push(h);
     }
-    Grid {
-        kind: GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 8 },
-        headers,
-        cells,
-        refs,
-        triangles: triangles.into(),
-        levels: Vec::new(),
-        budget_stop: None,
-    }
+    Grid::from_layout(GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 8 }, headers, cells, refs, triangles.into())
 }
 
 const BOX_MIN: Vec3 = Vec3::new(-1.3, 0.7, -2.1);
@@ -375,6 +367,105 @@ fn dda_visits_exactly_the_cells_on_the_ray() {
     assert_eq!(count(&one, &miss, 0.0, f32::INFINITY).node_visits, 0);
 }
 
+#[test]
+fn hand_built_grids_of_many_bricks_match_brute_force() {
+    // Top grids and sub-grids of several 4×4×4 bricks, partial bricks at every far face, so the
+    // brick DDA, the descent into an occupied brick's cells and the return to the brick DDA all
+    // run (the 4×4×4 grids above are one brick each).
+    let tris = hand_triangles();
+    let scene = scene_of("hand", &tris);
+    let one = hand_grid(&tris, BOX_MIN, BOX_MAX, &leaf([9, 6, 5]));
+    assert!(one.headers[0].brick_res() == [3, 2, 2]);
+    let hits = check_hand_grid("9×6×5", &one, &scene, 7);
+    assert!(hits > 2_000, "only {hits} hits");
+    let spec = Spec {
+        res: [9, 6, 5],
+        children: vec![
+            ([4, 2, 2], leaf([6, 5, 9])),
+            ([3, 2, 2], leaf([2, 2, 2])),
+            ([8, 5, 4], Spec { res: [5, 5, 5], children: vec![([4, 4, 4], leaf([7, 1, 6]))] }),
+        ],
+    };
+    let deep = hand_grid(&tris, BOX_MIN, BOX_MAX, &spec);
+    assert_eq!(deep.headers.iter().map(|h| h.depth).max(), Some(3));
+    check_hand_grid("9×6×5 with sub-grids of many bricks", &deep, &scene, 8);
+}
+
+#[test]
+fn brick_dda_steps_each_empty_brick_once_and_the_cells_of_occupied_ones() {
+    // A 13×9×6 grid (bricks 4×3×2, partial at the far faces) holding only point-like degenerate
+    // triangles (never hit) in a few cells. A ray crossing it takes one step per brick it crosses
+    // and one more per cell it crosses inside an occupied brick, and visits exactly those cells:
+    // counted against f64 spans of every brick and cell, between those crossed over a clearly
+    // positive length and those come within a hair of.
+    let res = [13, 9, 6];
+    let h = header(BOX_MIN, BOX_MAX, res, 1);
+    let occupied_cells = [[0u32, 0, 0], [5, 4, 2], [12, 8, 5], [7, 1, 4], [2, 7, 1]];
+    let points: Vec<Triangle> = occupied_cells
+        .iter()
+        .map(|&c| {
+            let (lo, hi) = cell_box(&h, c);
+            let p = lo + (hi - lo) * 0.4;
+            [p, p, p]
+        })
+        .collect();
+    let grid = hand_grid(&points, BOX_MIN, BOX_MAX, &leaf(res));
+    let brick = |c: [u32; 3]| c.map(|i| i >> structures::grid::BRICK_SHIFT);
+    let occupied_bricks: Vec<[u32; 3]> = occupied_cells.iter().map(|&c| brick(c)).collect();
+    let (mut bricks, mut cells) = (Vec::new(), Vec::new());
+    for z in 0..res[2] {
+        for y in 0..res[1] {
+            for x in 0..res[0] {
+                let c = [x, y, z];
+                if c.iter().all(|&i| i % 4 == 0) {
+                    let hi = [0, 1, 2].map(|a| (c[a] + 4).min(res[a]));
+                    bricks.push((cell_box(&h, c).0, cell_box(&h, hi.map(|i| i - 1)).1));
+                }
+                if occupied_bricks.contains(&brick(c)) {
+                    cells.push(cell_box(&h, c));
+                }
+            }
+        }
+    }
+    assert_eq!(bricks.len(), 4 * 3 * 2);
+    let mut rng = Pcg64Mcg::seed_from_u64(0xB41C);
+    let ext = BOX_MAX - BOX_MIN;
+    let mut exact = 0;
+    let count = |boxes: &[(Vec3, Vec3)], ray: &Ray, t_min: f32| {
+        let (mut surely, mut maybe) = (0, 0);
+        for &(lo, hi) in boxes {
+            let (t0, t1) = span_f64(ray, lo, hi, f64::from(t_min));
+            surely += usize::from(t1 - t0 > 1e-4);
+            maybe += usize::from(t1 - t0 > -1e-4);
+        }
+        (surely, maybe)
+    };
+    for i in 0..3_000 {
+        let o = BOX_MIN - ext * 0.3 + ext * 1.6 * Vec3::new(rng.random(), rng.random(), rng.random());
+        let mut d = random_unit(&mut rng);
+        if i % 3 == 0 {
+            d[i % 9 / 3] = 0.0;
+        }
+        let ray = Ray::new(o, d);
+        let t_min = if i % 2 == 0 { 0.0 } else { rng.random_range(0.0..4.0) };
+        let (brick_surely, brick_maybe) = count(&bricks, &ray, t_min);
+        let (cell_surely, cell_maybe) = count(&cells, &ray, t_min);
+        let mut c = Counters::default();
+        assert!(grid.intersect_counted(&ray, t_min, f32::INFINITY, &mut c).is_none());
+        let (visits, steps) = (c.node_visits as usize, c.steps as usize);
+        assert!(
+            (cell_surely..=cell_maybe).contains(&visits),
+            "ray {ray:?} from t {t_min}: {visits} cell visits, crosses {cell_surely} to {cell_maybe} cells of occupied bricks"
+        );
+        assert!(
+            (brick_surely + cell_surely..=brick_maybe + cell_maybe).contains(&steps),
+            "ray {ray:?} from t {t_min}: {steps} steps, crosses {brick_surely} to {brick_maybe} bricks and {cell_surely} to {cell_maybe} cells of occupied bricks"
+        );
+        exact += usize::from(visits == cell_surely && steps == brick_surely + cell_surely);
+    }
+    assert!(exact > 2_900, "only {exact} of 3000 rays take exactly the steps they clearly need");
+}
+
 /// The ray's span `[t0, t1]` inside the box `[lo, hi]` from `t_min` on, in f64 (a test oracle).
 fn span_f64(ray: &Ray, lo: Vec3, hi: Vec3, t_min: f64) -> (f64, f64) {
     let (mut t0, mut t1) = (t_min, f64::INFINITY);
@@ -401,13 +492,29 @@ fn visits_exactly_the_cells_the_ray_crosses_at_every_level() {
     // and those it comes within a hair of. Catches DDAs that are right but wasteful (a sub-grid
     // walked from its first cell instead of from where the ray enters it, say).
     let nothing: Vec<Triangle> = vec![[BOX_MIN, BOX_MIN, BOX_MIN]];
+    // Cells of a grid of several bricks are visited only in occupied bricks (the sub-grids of 3×2×5
+    // and 5×1×2 cells have two bricks each, both empty); a one-brick grid's cells all are.
     let grid = hand_grid(&nothing, BOX_MIN, BOX_MAX, &two_level_spec(true));
     let mut all_cells = Vec::new();
     for h in &grid.headers {
+        let brick = |c: [u32; 3]| c.map(|i| i >> structures::grid::BRICK_SHIFT);
+        let index = |c: [u32; 3]| (h.first_cell + c[0] + h.res[0] * (c[1] + h.res[1] * c[2])) as usize;
+        let mut occupied = Vec::new();
         for z in 0..h.res[2] {
             for y in 0..h.res[1] {
                 for x in 0..h.res[0] {
-                    all_cells.push(cell_box(h, [x, y, z]));
+                    if grid.cells[index([x, y, z])] != grid.cells[index([x, y, z]) + 1] {
+                        occupied.push(brick([x, y, z]));
+                    }
+                }
+            }
+        }
+        for z in 0..h.res[2] {
+            for y in 0..h.res[1] {
+                for x in 0..h.res[0] {
+                    if h.brick_res() == [1, 1, 1] || occupied.contains(&brick([x, y, z])) {
+                        all_cells.push(cell_box(h, [x, y, z]));
+                    }
                 }
             }
         }

@@ -1,5 +1,5 @@
 //! The grid family's GPU program: `grid.wgsl` (one hierarchical DDA for UG, RG, RG-2 and ORG) over
-//! the grid's own headers, cells and refs, plus the triangle soup (CPU twin: `cpu::grid`).
+//! the grid's own headers, cells, refs and brick occupancy words, plus the triangle soup (CPU twin: `cpu::grid`).
 
 use structures::grid::Grid;
 
@@ -16,6 +16,7 @@ pub fn program(grid: &Grid) -> GpuProgram<'_> {
             GpuBuffer::words_of("headers", &grid.headers),
             GpuBuffer::words_of("cells", &grid.cells),
             GpuBuffer::words_of("refs", &grid.refs),
+            GpuBuffer::words_of("bricks", &grid.bricks),
             GpuBuffer::words_of("triangles", &grid.triangles[..]),
         ],
         prepass: None,
@@ -30,7 +31,8 @@ mod tests {
         for line in [
             format!("const GRID_MAX_DEPTH: u32 = {}u;", structures::grid::MAX_DEPTH),
             format!("const SUBGRID_BIT: u32 = {:#x}u;", structures::grid::SUBGRID_BIT),
-            format!("var stack: array<Level, {}>;", structures::grid::MAX_DEPTH - 1),
+            format!("const BRICK_SHIFT: u32 = {}u;", structures::grid::BRICK_SHIFT),
+            format!("var stack: array<Level, {}>;", 2 * structures::grid::MAX_DEPTH - 1),
         ] {
             assert!(super::WGSL.contains(&line), "grid.wgsl must declare {line}");
         }

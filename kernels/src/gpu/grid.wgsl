@@ -5,14 +5,19 @@
 // from `grid_boundary` (GridHeader::boundary's arithmetic), never accumulated.
 //
 // Buffers (structures::grid::layout, uploaded as stored):
-// - `headers`: GridHeader, 16 words each: min.xyz, first_cell, max.xyz, depth, cell_size.xyz, pad,
-//   res.xyz, pad. Header 0 is the top grid.
+// - `headers`: GridHeader, 16 words each: min.xyz, first_cell, max.xyz, depth, cell_size.xyz,
+//   first_brick, res.xyz, pad. Header 0 is the top grid.
 // - `cells`: per grid, res.x·res.y·res.z + 1 prefix-summed offsets into `refs`.
 // - `refs`: triangle ids; or, alone in its cell, SUBGRID_BIT | the sub-grid's header index.
+// - `bricks`: per grid from word `first_brick`, one occupancy bit per brick of 4×4×4 cells, set
+//   exactly when one of its cells holds a reference; the DDA steps empty bricks whole.
 // - `triangles`: the scene's triangle soup (read by triangle.wgsl).
 
-// structures::grid::MAX_DEPTH (seed 002's MAXDEPTH) and SUBGRID_BIT (checked by a Rust test).
+// structures::grid::MAX_DEPTH (seed 002's MAXDEPTH), BRICK_SHIFT and SUBGRID_BIT (checked by a
+// Rust test). The stack holds, per grid above the current one, its brick DDA and its cell DDA,
+// and the current grid's brick DDA: 2·MAX_DEPTH − 1 entries.
 const GRID_MAX_DEPTH: u32 = 8u;
+const BRICK_SHIFT: u32 = 2u;
 const SUBGRID_BIT: u32 = 0x80000000u;
 // cpu::grid's HIT_MARGIN, 1/8192: traversal stops only once the best hit lies this far inside the
 // cells visited, so a nearer-by-a-few-ulps triangle listed only in the next cell is not skipped.
@@ -23,6 +28,7 @@ struct GridHeader {
     first_cell: u32,
     hi: vec3<f32>,
     cell_size: vec3<f32>,
+    first_brick: u32,
     res: vec3<u32>,
 }
 
@@ -33,6 +39,7 @@ fn grid_header(h: u32) -> GridHeader {
         headers(w + 3u),
         vec3<f32>(bitcast<f32>(headers(w + 4u)), bitcast<f32>(headers(w + 5u)), bitcast<f32>(headers(w + 6u))),
         vec3<f32>(bitcast<f32>(headers(w + 8u)), bitcast<f32>(headers(w + 9u)), bitcast<f32>(headers(w + 10u))),
+        headers(w + 11u),
         vec3<u32>(headers(w + 12u), headers(w + 13u), headers(w + 14u)),
     );
 }
@@ -64,22 +71,30 @@ fn dda_ray(ray: Ray) -> DdaRay {
     return DdaRay(ray.origin, dir, inv, step);
 }
 
-// The DDA state of one level: grid, cell, the start of the cell's span, and where the ray crosses
-// the cell's far boundary on each axis (+inf on an axis that never steps).
+// One DDA (cpu::grid::Level): over the bricks of a grid (shift = BRICK_SHIFT), or over the cells
+// of one brick or of a one-brick grid (shift = 0). `cell`, `lo` and `span` count units of
+// 1 << shift cells; the DDA leaves once a step takes cell[a] out of [lo[a], lo[a] + span[a]).
+// `index` is the unit's linear index in its grid, moved by delta[a] per step; t_next[a] is where
+// the ray leaves the unit on axis a (+inf on an axis that never steps).
 struct Level {
     header: u32,
+    shift: u32,
     cell: vec3<u32>,
+    lo: vec3<u32>,
+    span: vec3<u32>,
+    index: u32,
+    delta: vec3<u32>,
     t_in: f32,
     t_next: vec3<f32>,
 }
 
-// Where the ray leaves cell `c` on axis `a` (its far boundary); +inf if `a` never steps.
-fn exit_t(r: DdaRay, h: GridHeader, a: u32, c: u32) -> f32 {
+// Where the ray leaves unit `c` (of 1 << shift cells) on axis `a`; +inf if `a` never steps.
+fn exit_t(r: DdaRay, h: GridHeader, a: u32, c: u32, shift: u32) -> f32 {
     let s = r.step[a];
     if (s == 0) {
         return f32_inf();
     }
-    let i = select(c, c + 1u, s > 0);
+    let i = select(c, c + 1u, s > 0) << shift;
     return (grid_boundary(h, a, i) - r.origin[a]) * r.inv[a];
 }
 
@@ -95,22 +110,60 @@ fn start_cell(p: f32, lo: f32, size: f32, last: u32) -> u32 {
     return 0u;
 }
 
-// The DDA state of grid `header` (already loaded as `h`) for a ray entering it at `t_in`.
-fn enter(r: DdaRay, h: GridHeader, header: u32, t_in: f32) -> Level {
+// The cell of grid `h` holding the ray's point at `t`, per axis.
+fn start_cells(r: DdaRay, h: GridHeader, t: f32) -> vec3<u32> {
     var cell = vec3<u32>(0u);
-    var t_next = vec3<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
         var p = r.origin[a];
         if (r.step[a] != 0) {
-            p = r.origin[a] + r.dir[a] * t_in;
+            p = r.origin[a] + r.dir[a] * t;
         }
         cell[a] = start_cell(p, h.lo[a], h.cell_size[a], h.res[a] - 1u);
-        t_next[a] = exit_t(r, h, a, cell[a]);
     }
-    return Level(header, cell, t_in, t_next);
+    return cell;
 }
 
-// ADVANCE: steps `lv` into the next cell of its grid; false once the ray leaves the grid (or no
+// A DDA over units [lo, lo + span) of 1 << shift cells of grid `header`, from unit `cell` at t_in;
+// `units` is the grid's extent in those units (its linear strides).
+fn dda_level(
+    r: DdaRay, h: GridHeader, header: u32, shift: u32, cell: vec3<u32>, lo: vec3<u32>, span: vec3<u32>,
+    units: vec3<u32>, t_in: f32,
+) -> Level {
+    let stride = vec3<u32>(1u, units.x, units.x * units.y);
+    let delta = stride * bitcast<vec3<u32>>(r.step);
+    var t_next = vec3<f32>(0.0);
+    for (var a = 0u; a < 3u; a++) {
+        t_next[a] = exit_t(r, h, a, cell[a], shift);
+    }
+    return Level(header, shift, cell, lo, span, dot(stride, cell), delta, t_in, t_next);
+}
+
+// The DDA of grid `header` (already loaded as `h`) for a ray entering it at `t_in`: over its
+// bricks, or over its cells when it has one brick.
+fn enter(r: DdaRay, h: GridHeader, header: u32, t_in: f32) -> Level {
+    let cell = start_cells(r, h, t_in);
+    let bricks = (h.res + vec3<u32>(3u)) >> vec3<u32>(BRICK_SHIFT);
+    if (all(bricks == vec3<u32>(1u))) {
+        return dda_level(r, h, header, 0u, cell, vec3<u32>(0u), h.res, h.res, t_in);
+    }
+    return dda_level(r, h, header, BRICK_SHIFT, cell >> vec3<u32>(BRICK_SHIFT), vec3<u32>(0u), bricks, bricks, t_in);
+}
+
+// The DDA over the cells of the occupied brick the brick DDA `b` is in, from its span start: the
+// start cell clamped into the brick (the point may round a cell outside).
+fn enter_brick(r: DdaRay, h: GridHeader, b: Level) -> Level {
+    let lo = b.cell << vec3<u32>(BRICK_SHIFT);
+    let span = min(h.res - lo, vec3<u32>(1u << BRICK_SHIFT));
+    let cell = clamp(start_cells(r, h, b.t_in), lo, lo + span - vec3<u32>(1u));
+    return dda_level(r, h, b.header, 0u, cell, lo, span, h.res, b.t_in);
+}
+
+// Whether brick `index` of grid `h` holds a reference.
+fn occupied(h: GridHeader, index: u32) -> bool {
+    return ((bricks(h.first_brick + index / 32u) >> (index % 32u)) & 1u) != 0u;
+}
+
+// ADVANCE: steps `lv` into the next unit; false once the ray leaves the DDA's range (or no
 // boundary lies ahead on any axis).
 fn advance(r: DdaRay, h: GridHeader, lv: ptr<function, Level>) -> bool {
     let tn = (*lv).t_next;
@@ -128,14 +181,15 @@ fn advance(r: DdaRay, h: GridHeader, lv: ptr<function, Level>) -> bool {
     if (!(abs(t) <= F32_MAX)) {
         return false;
     }
-    // Leaving below 0 wraps to 0xffffffff, so one comparison covers both ends.
+    // Leaving below `lo` wraps to a huge offset, so one comparison covers both ends.
     let c = (*lv).cell[a] + bitcast<u32>(r.step[a]);
-    if (c >= h.res[a]) {
+    if (c - (*lv).lo[a] >= (*lv).span[a]) {
         return false;
     }
     (*lv).cell[a] = c;
+    (*lv).index += (*lv).delta[a];
     (*lv).t_in = t;
-    (*lv).t_next[a] = exit_t(r, h, a, c);
+    (*lv).t_next[a] = exit_t(r, h, a, c, (*lv).shift);
     return true;
 }
 
@@ -160,8 +214,8 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     var best_t = ray.t_max;
     var cull_t = cull_bound(ray.t_max);
     var best_prim = NO_PRIM;
-    // Parents of the current level, innermost last.
-    var stack: array<Level, 7>;
+    // The DDAs the current one was entered from, innermost last.
+    var stack: array<Level, 15>;
     var sp = 0u;
     var h = top;
     var cur = enter(r, h, 0u, clip.x);
@@ -170,32 +224,45 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
         if (!next_step(&guard)) {
             return no_hit();
         }
-        let cell = h.first_cell + cur.cell.x + h.res.x * (cur.cell.y + h.res.y * cur.cell.z);
-        let begin = cells(cell);
-        let end = cells(cell + 1u);
-        if (end == begin + 1u) {
-            let link = refs(begin);
-            // PUSH: the sub-grid covers exactly this cell; run its DDA over this cell's span.
-            // (A hierarchy deeper than the builder allows ends the ray, where the CPU panics.)
-            if ((link & SUBGRID_BIT) != 0u) {
-                if (sp >= GRID_MAX_DEPTH - 1u) {
+        if (cur.shift != 0u) {
+            // A brick: step over it when empty, else run the DDA of its cells over its span.
+            if (occupied(h, cur.index)) {
+                if (sp >= 2u * GRID_MAX_DEPTH - 1u) {
                     break;
                 }
                 stack[sp] = cur;
                 sp += 1u;
-                let sub = link & ~SUBGRID_BIT;
-                h = grid_header(sub);
-                cur = enter(r, h, sub, cur.t_in);
+                cur = enter_brick(r, h, cur);
                 continue;
             }
-        }
-        for (var k = begin; k < end; k++) {
-            let prim = refs(k);
-            let t = intersect_triangle(sheared, prim, t_min, best_t);
-            if (t < best_t) {
-                best_t = t;
-                cull_t = cull_bound(t);
-                best_prim = prim;
+        } else {
+            let cell = h.first_cell + cur.index;
+            let begin = cells(cell);
+            let end = cells(cell + 1u);
+            if (end == begin + 1u) {
+                let link = refs(begin);
+                // PUSH: the sub-grid covers exactly this cell; run its DDA over this cell's span.
+                // (A hierarchy deeper than the builder allows ends the ray, where the CPU panics.)
+                if ((link & SUBGRID_BIT) != 0u) {
+                    if (sp >= 2u * GRID_MAX_DEPTH - 1u) {
+                        break;
+                    }
+                    stack[sp] = cur;
+                    sp += 1u;
+                    let sub = link & ~SUBGRID_BIT;
+                    h = grid_header(sub);
+                    cur = enter(r, h, sub, cur.t_in);
+                    continue;
+                }
+            }
+            for (var k = begin; k < end; k++) {
+                let prim = refs(k);
+                let t = intersect_triangle(sheared, prim, t_min, best_t);
+                if (t < best_t) {
+                    best_t = t;
+                    cull_t = cull_bound(t);
+                    best_prim = prim;
+                }
             }
         }
         var moved = false;
@@ -204,7 +271,7 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
             if (cull_t < t_out(cur)) {
                 break;
             }
-            // ADVANCE within this grid, or POP to the parent's DDA once the sub-grid is exhausted.
+            // ADVANCE within this DDA, or POP to the one it was entered from once it is done.
             if (advance(r, h, &cur)) {
                 moved = true;
                 break;
@@ -213,8 +280,11 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
                 break;
             }
             sp -= 1u;
+            let leaving_grid = cur.header != stack[sp].header;
             cur = stack[sp];
-            h = grid_header(cur.header);
+            if (leaving_grid) {
+                h = grid_header(cur.header);
+            }
         }
         if (!moved) {
             break;

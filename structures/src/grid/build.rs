@@ -204,7 +204,10 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
         frontier = first_new..nodes.len() as u32;
     }
     let (headers, cells, refs) = flatten(&nodes);
-    Ok(Grid { kind, headers, cells, refs, triangles: input.triangles.clone(), levels, budget_stop })
+    let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
+    grid.levels = levels;
+    grid.budget_stop = budget_stop;
+    Ok(grid)
 }
 
 /// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions; `level_beta` is

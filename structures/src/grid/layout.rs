@@ -6,6 +6,13 @@
 //!   cells numbered `x + res.x · (y + res.y · z)`.
 //! - `refs`: triangle ids; or, alone in its cell, [`SUBGRID_BIT`] | the index of the sub-grid
 //!   header that refines the cell.
+//! - `bricks`: for each grid, one occupancy bit per brick of `4 × 4 × 4` cells (`2^BRICK_SHIFT`
+//!   per axis; bricks at the far faces hold fewer), set exactly when one of the brick's cells holds
+//!   a reference, bricks numbered like cells over `brick_res()`, packed 32 to a `u32` from
+//!   `bricks[first_brick]`. The DDA steps whole empty bricks with one bit test instead of stepping
+//!   their cells one offset pair at a time (issue 16: 97 % of ORG's steps on the dragon were in
+//!   empty cells). Brick faces are cell faces, computed by the same [`GridHeader::boundary`], so
+//!   the exact-span argument of the kernels holds across both levels.
 //!
 //! Keeping sub-grid links in `refs` keeps `cells` a pure prefix sum: one count pass, one
 //! prefix sum and one fill pass build any level (seed 002 §1, DESIGN.md §4.5).
@@ -15,6 +22,9 @@ use glam::{UVec3, Vec3};
 
 /// Marks a reference that points to a sub-grid header instead of a triangle.
 pub const SUBGRID_BIT: u32 = 1 << 31;
+
+/// A brick is `2^BRICK_SHIFT` cells along each axis.
+pub const BRICK_SHIFT: u32 = 2;
 
 /// One (sub-)grid, 64 bytes (16 `u32` words on the GPU).
 #[repr(C)]
@@ -30,7 +40,8 @@ pub struct GridHeader {
     pub depth: u32,
     /// Edge lengths of one cell: `(max − min) / res`.
     pub cell_size: [f32; 3],
-    pub _pad0: u32,
+    /// Index in `bricks` of this grid's first occupancy word.
+    pub first_brick: u32,
     /// Cells per axis, each ≥ 1.
     pub res: [u32; 3],
     pub _pad1: u32,
@@ -39,34 +50,70 @@ pub struct GridHeader {
 const _: () = assert!(size_of::<GridHeader>() == 64);
 
 impl GridHeader {
+    #[inline]
     pub fn min(&self) -> Vec3 {
         Vec3::from_array(self.min)
     }
 
+    #[inline]
     pub fn max(&self) -> Vec3 {
         Vec3::from_array(self.max)
     }
 
+    #[inline]
     pub fn cell_size(&self) -> Vec3 {
         Vec3::from_array(self.cell_size)
     }
 
+    #[inline]
     pub fn res(&self) -> UVec3 {
         UVec3::from_array(self.res)
     }
 
+    #[inline]
     pub fn cell_count(&self) -> u32 {
         self.res[0] * self.res[1] * self.res[2]
     }
 
+    /// Bricks per axis: `⌈res / 2^BRICK_SHIFT⌉`.
+    #[inline]
+    pub fn brick_res(&self) -> [u32; 3] {
+        self.res.map(|r| r.div_ceil(1 << BRICK_SHIFT))
+    }
+
+    /// Occupancy words of this grid (32 bricks per word).
+    #[inline]
+    pub fn brick_words(&self) -> u32 {
+        let [x, y, z] = self.brick_res();
+        (x * y * z).div_ceil(32)
+    }
+
     /// Linear index of cell (x, y, z).
+    #[inline]
     pub fn cell_index(&self, x: u32, y: u32, z: u32) -> u32 {
         x + self.res[0] * (y + self.res[1] * z)
     }
 
     /// Lower corner of cell `i` along `axis`, computed the one way every user of the layout
     /// (builder, CPU and GPU kernels) computes it, so neighbouring cells share boundaries exactly.
+    #[inline]
     pub fn boundary(&self, axis: usize, i: u32) -> f32 {
         if i >= self.res[axis] { self.max[axis] } else { self.min[axis] + i as f32 * self.cell_size[axis] }
     }
+}
+
+/// The brick occupancy words of grid `h` from its `M + 1` offsets: a brick's bit is set exactly
+/// when one of its cells is non-empty.
+pub fn occupancy(h: &GridHeader, offsets: &[u32]) -> Vec<u32> {
+    let [bx, by, _] = h.brick_res();
+    let mut words = vec![0u32; h.brick_words() as usize];
+    let (rx, ry) = (h.res[0], h.res[1]);
+    for c in 0..h.cell_count() {
+        if offsets[c as usize] != offsets[c as usize + 1] {
+            let [x, y, z] = [c % rx, (c / rx) % ry, c / (rx * ry)].map(|i| i >> BRICK_SHIFT);
+            let b = x + bx * (y + by * z);
+            words[(b / 32) as usize] |= 1 << (b % 32);
+        }
+    }
+    words
 }

@@ -28,7 +28,7 @@ use serde::Serialize;
 
 use crate::{MemoryReport, Structure};
 pub use build::{MAX_DEPTH, MAX_REFS, build};
-pub use layout::{GridHeader, SUBGRID_BIT};
+pub use layout::{BRICK_SHIFT, GridHeader, SUBGRID_BIT};
 
 /// Which member of the family, and its parameters (defaults: seed 002 §3 and DESIGN.md §4.5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -127,6 +127,8 @@ pub struct Grid {
     pub headers: Vec<GridHeader>,
     pub cells: Vec<u32>,
     pub refs: Vec<u32>,
+    /// Brick occupancy bits (see `layout`).
+    pub bricks: Vec<u32>,
     /// The scene's triangle soup (shared, not counted in [`Structure::memory`]).
     pub triangles: Arc<[Triangle]>,
     pub levels: Vec<LevelStats>,
@@ -135,6 +137,23 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// A grid from its headers (`first_cell` set), prefix-summed cells and references: sets each
+    /// header's `first_brick` and derives the brick occupancy bits (see `layout`).
+    pub fn from_layout(
+        kind: GridKind,
+        mut headers: Vec<GridHeader>,
+        cells: Vec<u32>,
+        refs: Vec<u32>,
+        triangles: Arc<[Triangle]>,
+    ) -> Grid {
+        let mut bricks = Vec::new();
+        for h in &mut headers {
+            h.first_brick = bricks.len() as u32;
+            bricks.extend(layout::occupancy(h, &cells[h.first_cell as usize..]));
+        }
+        Grid { kind, headers, cells, refs, bricks, triangles, levels: Vec::new(), budget_stop: None }
+    }
+
     /// N_c: cells over all levels.
     pub fn cell_count(&self) -> u64 {
         self.levels.iter().map(|l| l.cells).sum()
@@ -158,6 +177,7 @@ impl Structure for Grid {
             .with("references", self.triangle_ref_count() * size_of::<u32>() as u64)
             .with("sub-grid links", links * size_of::<u32>() as u64)
             .with("sub-grid headers", (self.headers.len() * size_of::<GridHeader>()) as u64)
+            .with("brick occupancy", (self.bricks.len() * size_of::<u32>()) as u64)
     }
 
     fn params(&self) -> serde_json::Value {

@@ -1,13 +1,14 @@
 //! Structural checks of a built grid, for the builder's debug assertions and the tests.
 
 use super::Grid;
-use super::layout::SUBGRID_BIT;
+use super::layout::{BRICK_SHIFT, SUBGRID_BIT};
 
 impl Grid {
     /// Checks the layout's invariants: each grid's offsets are a prefix sum inside `refs`; every
     /// reference is a triangle or a sub-grid link alone in its cell; every sub-grid is linked
-    /// exactly once, one level below its parent, over exactly its parent cell's box; and every
-    /// triangle is listed somewhere.
+    /// exactly once, one level below its parent, over exactly its parent cell's box; every brick's
+    /// occupancy bit is set exactly when one of its cells is non-empty; and every triangle is
+    /// listed somewhere.
     #[allow(clippy::needless_range_loop)] // `a` indexes four arrays at once
     pub fn validate(&self) -> Result<(), String> {
         let mut linked = vec![0u32; self.headers.len()];
@@ -19,8 +20,20 @@ impl Grid {
             if offsets.windows(2).any(|w| w[0] > w[1]) || offsets[m] as usize > self.refs.len() {
                 return Err(format!("grid {g}: offsets are not a prefix sum inside refs"));
             }
+            let [bx, by, _] = h.brick_res();
+            let words = self
+                .bricks
+                .get(h.first_brick as usize..(h.first_brick + h.brick_words()) as usize)
+                .ok_or(format!("grid {g}: brick words out of range"))?;
+            let mut occupied = vec![0u32; words.len()];
             for c in 0..m {
                 let refs = &self.refs[offsets[c] as usize..offsets[c + 1] as usize];
+                if !refs.is_empty() {
+                    let (rx, ry) = (h.res[0], h.res[1]);
+                    let idx = [c as u32 % rx, (c as u32 / rx) % ry, c as u32 / (rx * ry)].map(|i| i >> BRICK_SHIFT);
+                    let b = idx[0] + bx * (idx[1] + by * idx[2]);
+                    occupied[(b / 32) as usize] |= 1 << (b % 32);
+                }
                 for &r in refs {
                     if r & SUBGRID_BIT == 0 {
                         *listed.get_mut(r as usize).ok_or(format!("grid {g} cell {c}: triangle {r} out of range"))? =
@@ -45,6 +58,9 @@ impl Grid {
                         }
                     }
                 }
+            }
+            if occupied != words {
+                return Err(format!("grid {g}: brick occupancy bits differ from its cells"));
             }
         }
         if let Some(g) = (1..linked.len()).find(|&g| linked[g] != 1) {

@@ -1,0 +1,52 @@
+//! One structure, one fixed ray set, one thread, nothing else: the camera rays of a scene at
+//! `size`² traced with `Traverse::intersect`, the hits summarised (a checksum that changes when any
+//! hit does). A workload for `valgrind --tool=callgrind`, whose instruction counts are repeatable
+//! where this VM's timings are not (issue 16 compares grid kernels per ray this way):
+//!
+//! ```sh
+//! cargo build --example trace_rays -p harness
+//! valgrind --tool=callgrind --collect-atstart=no '--toggle-collect=trace_rays::trace_all' \
+//!     target/debug/examples/trace_rays dragon 256 org org.beta=counted
+//! ```
+//!
+//! Arguments: scene, size, structure, then any `key=value` structure parameters.
+
+use std::time::Instant;
+
+use kernels::Accel;
+use scenes::Camera;
+use structures::{BuildInput, Params};
+
+/// Traces every pixel's camera ray; returns (hits, checksum over hit triangles and `t` bits).
+#[inline(never)]
+fn trace_all(accel: &dyn Accel, camera: &Camera, size: u32) -> (u64, u64) {
+    let mut hits = 0u64;
+    let mut sum = 0u64;
+    for y in 0..size {
+        for x in 0..size {
+            if let Some(h) = accel.intersect(&camera.ray(x, y), 0.0, f32::INFINITY) {
+                hits += 1;
+                sum = sum.wrapping_mul(31).wrapping_add(h.prim ^ u64::from(h.t.to_bits()));
+            }
+        }
+    }
+    (hits, sum)
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let scene_name = args.get(1).map_or("dragon", String::as_str);
+    let size: u32 = args.get(2).map_or(Ok(256), |s| s.parse())?;
+    let structure = args.get(3).map_or("org", String::as_str);
+    let params = Params::parse(args.iter().skip(4).map(String::as_str))?;
+    let scene = scenes::load_scene(scene_name)?;
+    let camera = Camera::new(scene.camera_spec(), size, size);
+    let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+    let accel = kernels::registry::build_structure(structure, &input)
+        .ok_or_else(|| anyhow::anyhow!("no structure '{structure}'"))??;
+    let start = Instant::now();
+    let (hits, sum) = trace_all(accel.as_ref(), &camera, size);
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    println!("{scene_name} {size}² {structure}: {hits} hits, checksum {sum:016x}, {ms:.1} ms on one thread");
+    Ok(())
+}
