@@ -74,6 +74,10 @@ pub enum Preset {
     /// Seed 002 Table 1: ORG, UG, RG, RG-2 and the reference BVH on every built-in scene at
     /// 500×500, in the paper's layout (N_c, N_p, T_c, T_r with ratios to ORG).
     OrgTable1,
+    /// ORG as the paper builds it beside the fastest ORG configuration found (issue 16: a coarse
+    /// top grid, λ = 1/8, fine sub-grids, λ = 2, exact triangle/cell lists), the reference BVH and
+    /// Embree, on bunny, dragon-48k, city, terrain and the dragon at 1024×1024 on all cores.
+    OrgFast,
     /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
     /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
     /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;
@@ -251,6 +255,16 @@ pub struct Plan {
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
 
+/// The fastest ORG configuration found on the dragon (issue 16), the `fast` variant of the
+/// org-fast preset: a coarse top grid (λ = 1/8 of the paper's) whose occupied cells get sub-grids
+/// twice as dense (leaf λ = 2), triangles listed by the exact separating-axis test. The rest is
+/// the paper's method (Algorithms 1–2, β, γ, MAXDEPTH).
+pub const ORG_FAST: &[&str] = &["org.lambda=0.125", "org.leaf_lambda=2", "org.cell_test=sat"];
+
+fn vec_of(params: &[&str]) -> Vec<String> {
+    params.iter().map(|p| p.to_string()).collect()
+}
+
 impl Preset {
     pub fn name(self) -> &'static str {
         match self {
@@ -260,6 +274,7 @@ impl Preset {
             Preset::OrgFig1 => "org-fig1",
             Preset::OrgFig2 => "org-fig2",
             Preset::OrgTable1 => "org-table1",
+            Preset::OrgFast => "org-fast",
             Preset::SvdagTables => "svdag-tables",
         }
     }
@@ -277,6 +292,7 @@ impl Preset {
             // Tables 1–2 at 512³ and 1024³ (the paper's 1000³).
             (Preset::SvdagTables, "svo" | "esvo") => (9..=10).map(|l| at(l, &[], None)).collect(),
             // Table 3's 128³…2048³ in the seed's encoding; Kämpe's bricks where storage is compared.
+            (Preset::OrgFast, "org") => vec![(Vec::new(), None), (vec_of(ORG_FAST), Some("fast".into()))],
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -295,6 +311,7 @@ impl Preset {
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
+            Preset::OrgFast => vec!["bvh", "embree", "org"],
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
         };
         list.into_iter().map(String::from).collect()
@@ -312,6 +329,7 @@ impl Preset {
             Preset::Default => &["voxel.levels=9"],
             // Table 3 times the SVO → SVDAG conversion alone: build the octree first.
             Preset::SvdagTables => &["svdag.build=octree"],
+            Preset::OrgFast => &[],
         }
     }
 
@@ -327,6 +345,7 @@ impl Preset {
             }
             Preset::OrgFig2 => vec!["dragon-11k", "dragon-48k", "dragon-203k", "dragon", "dragon@sub1"],
             Preset::SvdagTables => vec!["bunny", "dragon", "menger", "city", "mandelbulb"],
+            Preset::OrgFast => vec!["bunny", "dragon-48k", "city", "terrain", "dragon"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -348,6 +367,7 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
+            Preset::OrgFast => (1024, 1024),
         }
     }
 }

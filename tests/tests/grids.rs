@@ -18,7 +18,7 @@ use kernels::{Counters, Traverse};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use scenes::{Camera, Ray, Scene, Triangle};
-use structures::grid::{Grid, GridHeader, GridKind, SUBGRID_BIT};
+use structures::grid::{BetaRule, CellTest, GammaTest, Grid, GridHeader, GridKind, SUBGRID_BIT};
 use structures::{BuildInput, Params};
 use tests::{
     Mismatch, TestRay, brute_force_answers, compare_with_answers, compare_with_brute_force, random_unit, ray_set,
@@ -572,11 +572,22 @@ fn stops_in_the_cell_of_the_hit() {
 // Built grids on every built-in scene
 // ---------------------------------------------------------------------------------------------
 
-const KINDS: [GridKind; 4] = [
+const KINDS: [GridKind; 5] = [
     GridKind::Ug { lambda: 5.0 },
     GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 },
     GridKind::Rg2,
     GridKind::ORG_PAPER,
+    // The org-fast preset's `fast` variant: coarse top grid, dense exact leaves.
+    GridKind::Org {
+        lambda: 0.125,
+        leaf_lambda: 2.0,
+        alpha: 2.0,
+        gamma: 16,
+        max_depth: 8,
+        beta: BetaRule::Level,
+        gamma_test: GammaTest::Reduced,
+        cell_test: CellTest::Sat,
+    },
 ];
 
 const RAYS_PER_SCENE: usize = 10_002;

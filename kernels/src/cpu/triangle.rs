@@ -84,7 +84,9 @@ impl ShearedRay {
             v = (ax * cy - ay * cx) as f32;
             w = (bx * ay - by * ax) as f32;
         }
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        // Signs mixed: the ray passes outside an edge. Non-short-circuit `|` and `&` make this one
+        // branch instead of up to six unpredictable ones (same answer).
+        if ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0)) {
             return None;
         }
         let det = u + v + w;

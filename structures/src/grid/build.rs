@@ -8,9 +8,9 @@ use rayon::prelude::*;
 use scenes::{Aabb, Triangle};
 
 use super::layout::{GridHeader, SUBGRID_BIT};
-use super::level::{LevelGrid, build_level, cell_range, header, range_cells};
+use super::level::{Footprint, LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
-use super::{BetaRule, GammaTest, Grid, GridKind, LevelStats};
+use super::{BetaRule, CellTest, GammaTest, Grid, GridKind, LevelStats};
 use crate::{BuildError, BuildInput};
 
 /// The deepest hierarchy any kind builds (seed 002 §2: MAXDEPTH = 4 × 2 = 8); the kernels'
@@ -38,11 +38,15 @@ impl GridKind {
             },
             "rg2" => GridKind::Rg2,
             "org" => {
-                let GridKind::Org { lambda, alpha, gamma, max_depth, beta, gamma_test } = GridKind::ORG_PAPER else {
+                let GridKind::Org { lambda, leaf_lambda: _, alpha, gamma, max_depth, beta, gamma_test, cell_test } =
+                    GridKind::ORG_PAPER
+                else {
                     unreachable!("ORG_PAPER is an Org")
                 };
                 GridKind::Org {
                     lambda: params.get(&key("lambda"), lambda)?,
+                    // The sub-grids' density defaults to the top grid's (the paper has one λ).
+                    leaf_lambda: params.get(&key("leaf_lambda"), params.get(&key("lambda"), lambda)?)?,
                     alpha: params.get(&key("alpha"), alpha)?,
                     gamma: params.get(&key("gamma"), gamma)?,
                     max_depth: params.get(&key("max_depth"), max_depth)?,
@@ -55,6 +59,11 @@ impl GridKind {
                         &key("gamma_test"),
                         gamma_test,
                         &[("reduced", GammaTest::Reduced), ("unreduced", GammaTest::Unreduced)],
+                    )?,
+                    cell_test: params.choice(
+                        &key("cell_test"),
+                        cell_test,
+                        &[("bbox", CellTest::Bbox), ("sat", CellTest::Sat)],
                     )?,
                 }
             }
@@ -75,6 +84,9 @@ impl GridKind {
                 bad("lambda", "must be positive and finite")
             }
             GridKind::Org { alpha, .. } if !positive(alpha) => bad("alpha", "must be positive and finite"),
+            GridKind::Org { leaf_lambda, .. } if !positive(leaf_lambda) => {
+                bad("leaf_lambda", "must be positive and finite")
+            }
             GridKind::Rg { max_depth, .. } | GridKind::Org { max_depth, .. }
                 if !(1..=MAX_DEPTH).contains(&max_depth) =>
             {
@@ -154,7 +166,9 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     let (bboxes, bounds, all) = top_input(tris);
 
     // The top grid.
-    let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, &bboxes, true);
+    let exact = (kind.cell_test() == CellTest::Sat).then_some(&tris[..]);
+    let fp = Footprint { bboxes: &bboxes, exact };
+    let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, fp, true);
     let mut nodes = vec![Node { level: top, input: all.len() as u64, children: Vec::new() }];
     let mut levels = Vec::new();
     let mut stored_refs = nodes[0].level.refs.len() as u64;
@@ -188,7 +202,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
             .map(|s| {
                 let parent = &nodes[s.parent as usize].level;
                 let b = cell_box(&parent.header, s.cell);
-                build_level(header(b, s.res, depth + 1), parent.cell_refs(s.cell as usize), &bboxes, false)
+                build_level(header(b, s.res, depth + 1), parent.cell_refs(s.cell as usize), fp, false)
             })
             .collect();
         levels.push(level_stats(&nodes, frontier.clone(), &splits, kind, level_beta));
@@ -230,8 +244,10 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_b
                 (refs.len() > gamma as usize && depth < max_depth).then(|| (eq1(extent, f64::from(lambda) * n_i), 0))
             }
             GridKind::Rg2 => (depth == 1).then(|| (eq1(extent, 8.0 * n_i), 0)),
-            GridKind::Org { lambda, gamma, .. } if f64::from(lambda) * n_i < min_target_for(gamma) => None,
-            GridKind::Org { lambda, alpha, gamma, max_depth, beta, gamma_test } if depth < max_depth => {
+            GridKind::Org { leaf_lambda: lambda, gamma, .. } if f64::from(lambda) * n_i < min_target_for(gamma) => None,
+            GridKind::Org { leaf_lambda: lambda, alpha, gamma, max_depth, beta, gamma_test, .. }
+                if depth < max_depth =>
+            {
                 let mean = mean_extent(refs, bboxes, &b);
                 let unreduced = algorithm2(extent, f64::from(lambda) * n_i, alpha, mean);
                 // β: the level's ratio, or counted from the triangles' cell ranges at the

@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::Vec3;
 use rayon::prelude::*;
-use scenes::Aabb;
+use scenes::{Aabb, Triangle};
 
 use super::layout::GridHeader;
 
@@ -50,7 +50,7 @@ pub(super) fn cell_range(h: &GridHeader, b: &Aabb) -> ([u32; 3], [u32; 3]) {
         if size <= 0.0 || last == 0 {
             continue;
         }
-        let slack = 4.0 * f32::EPSILON * h.min[a].abs().max(h.max[a].abs()) + 1e-4 * size;
+        let slack = slack(h, a);
         let cell = |x: f32| ((x - h.min[a]) / size).floor().clamp(0.0, last as f32) as u32;
         lo[a] = cell(b.min[a] - slack);
         hi[a] = cell(b.max[a] + slack);
@@ -63,31 +63,86 @@ pub(super) fn range_cells(lo: [u32; 3], hi: [u32; 3]) -> u64 {
     (0..3).map(|a| u64::from(hi[a] - lo[a] + 1)).product()
 }
 
-fn for_each_cell(h: &GridHeader, lo: [u32; 3], hi: [u32; 3], mut f: impl FnMut(usize)) {
+/// What a triangle is listed by: its bounding box, and optionally the triangle itself (a cell
+/// whose box its bounding box overlaps but the triangle misses is then left out; seed 002 lists by
+/// bounding box alone, `org.cell_test=sat` asks for the exact lists).
+#[derive(Clone, Copy)]
+pub(super) struct Footprint<'a> {
+    pub bboxes: &'a [Aabb],
+    pub exact: Option<&'a [Triangle]>,
+}
+
+/// Calls `f` with every cell of `lo..=hi` that triangle `t` is listed in.
+fn for_each_cell(h: &GridHeader, t: u32, lo: [u32; 3], hi: [u32; 3], fp: Footprint, mut f: impl FnMut(usize)) {
+    let exact = fp.exact.map(|tris| &tris[t as usize]);
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
             for x in lo[0]..=hi[0] {
+                if let Some(tri) = exact
+                    && lo != hi
+                    && !overlaps_cell(tri, h, [x, y, z])
+                {
+                    continue;
+                }
                 f(h.cell_index(x, y, z) as usize);
             }
         }
     }
 }
 
+/// Whether `tri` meets cell `c` of `h` widened by the slack of [`cell_range`]: the separating-axis
+/// test of Akenine-Möller ("Fast 3D triangle-box overlap testing", 2001) — the box's three axes,
+/// the triangle's normal and the nine edge × axis cross products — in f64 with closed
+/// comparisons, so a triangle touching the widened cell is always kept (a degenerate triangle's
+/// zero axes separate nothing).
+fn overlaps_cell(tri: &Triangle, h: &GridHeader, c: [u32; 3]) -> bool {
+    let mut center = [0f64; 3];
+    let mut half = [0f64; 3];
+    for a in 0..3 {
+        let slack = slack(h, a);
+        let (lo, hi) = (f64::from(h.boundary(a, c[a]) - slack), f64::from(h.boundary(a, c[a] + 1) + slack));
+        center[a] = 0.5 * (lo + hi);
+        half[a] = 0.5 * (hi - lo);
+    }
+    let v = tri.map(|p| [0, 1, 2].map(|a| f64::from(p[a]) - center[a]));
+    let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    let cross =
+        |p: [f64; 3], q: [f64; 3]| [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]];
+    let dot = |p: [f64; 3], q: [f64; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+    // Separated along `axis` when the triangle's projection misses the box's.
+    let separates = |axis: [f64; 3]| {
+        let r = half[0] * axis[0].abs() + half[1] * axis[1].abs() + half[2] * axis[2].abs();
+        let p = v.map(|q| dot(q, axis));
+        p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r
+    };
+    let edges = [sub(v[1], v[0]), sub(v[2], v[1]), sub(v[0], v[2])];
+    let units = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    if units.iter().any(|&u| separates(u)) || separates(cross(edges[0], edges[1])) {
+        return false;
+    }
+    !edges.iter().any(|&e| units.iter().any(|&u| separates(cross(u, e))))
+}
+
+/// How far a triangle's box is widened on `axis` before it is listed (see [`cell_range`]).
+fn slack(h: &GridHeader, axis: usize) -> f32 {
+    4.0 * f32::EPSILON * h.min[axis].abs().max(h.max[axis].abs()) + 1e-4 * h.cell_size[axis]
+}
+
 /// Builds one grid over `tris` (ids into `bboxes`). `parallel` spreads the triangles over rayon
 /// with atomic counters and cursors, then sorts each cell's references so the result does not
 /// depend on thread timing; the sequential path fills in input order, already sorted when the
 /// input is.
-pub(super) fn build_level(header: GridHeader, tris: &[u32], bboxes: &[Aabb], parallel: bool) -> LevelGrid {
+pub(super) fn build_level(header: GridHeader, tris: &[u32], fp: Footprint, parallel: bool) -> LevelGrid {
     let m = header.cell_count() as usize;
-    if parallel { build_parallel(header, m, tris, bboxes) } else { build_sequential(header, m, tris, bboxes) }
+    if parallel { build_parallel(header, m, tris, fp) } else { build_sequential(header, m, tris, fp) }
 }
 
-fn build_sequential(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb]) -> LevelGrid {
+fn build_sequential(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -> LevelGrid {
     // Count pass.
     let mut offsets = vec![0u32; m + 1];
-    let ranges: Vec<([u32; 3], [u32; 3])> = tris.iter().map(|&t| cell_range(&header, &bboxes[t as usize])).collect();
-    for &(lo, hi) in &ranges {
-        for_each_cell(&header, lo, hi, |c| offsets[c + 1] += 1);
+    let ranges: Vec<([u32; 3], [u32; 3])> = tris.iter().map(|&t| cell_range(&header, &fp.bboxes[t as usize])).collect();
+    for (&t, &(lo, hi)) in tris.iter().zip(&ranges) {
+        for_each_cell(&header, t, lo, hi, fp, |c| offsets[c + 1] += 1);
     }
     // Prefix sum.
     for c in 0..m {
@@ -97,7 +152,7 @@ fn build_sequential(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb])
     let mut cursor = offsets.clone();
     let mut refs = vec![0u32; offsets[m] as usize];
     for (&t, &(lo, hi)) in tris.iter().zip(&ranges) {
-        for_each_cell(&header, lo, hi, |c| {
+        for_each_cell(&header, t, lo, hi, fp, |c| {
             refs[cursor[c] as usize] = t;
             cursor[c] += 1;
         });
@@ -105,12 +160,12 @@ fn build_sequential(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb])
     LevelGrid { header, offsets, refs }
 }
 
-fn build_parallel(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb]) -> LevelGrid {
+fn build_parallel(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -> LevelGrid {
     // Count pass.
     let counts: Vec<AtomicU32> = (0..m).map(|_| AtomicU32::new(0)).collect();
     tris.par_iter().for_each(|&t| {
-        let (lo, hi) = cell_range(&header, &bboxes[t as usize]);
-        for_each_cell(&header, lo, hi, |c| {
+        let (lo, hi) = cell_range(&header, &fp.bboxes[t as usize]);
+        for_each_cell(&header, t, lo, hi, fp, |c| {
             counts[c].fetch_add(1, Ordering::Relaxed);
         });
     });
@@ -128,8 +183,8 @@ fn build_parallel(header: GridHeader, m: usize, tris: &[u32], bboxes: &[Aabb]) -
     }
     let slots: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
     tris.par_iter().for_each(|&t| {
-        let (lo, hi) = cell_range(&header, &bboxes[t as usize]);
-        for_each_cell(&header, lo, hi, |c| {
+        let (lo, hi) = cell_range(&header, &fp.bboxes[t as usize]);
+        for_each_cell(&header, t, lo, hi, fp, |c| {
             let slot = counts[c].fetch_add(1, Ordering::Relaxed);
             slots[slot as usize].store(t, Ordering::Relaxed);
         });

@@ -9,8 +9,8 @@
 //! | `rg2` | `(8N)^0.6` top cells, `8·N_2` per cell | two levels (Ize et al. 2007) |
 //! | `org` | Algorithms 1 + 2 | every non-empty cell a candidate; λ·N_i/β cells; γ cut-off; depth ≤ 8 |
 //!
-//! Triangles are indexed by bounding-box overlap with cells (no exact triangle/box test), as in
-//! the paper; the boxes are widened by a few ulps of the grid so a triangle lying exactly on a
+//! Triangles are indexed by bounding-box overlap with cells, as in the paper (ORG can ask for an
+//! exact triangle/box test instead, `org.cell_test=sat`); the boxes are widened by a few ulps of the grid so a triangle lying exactly on a
 //! cell boundary is listed on both sides.
 
 pub mod build;
@@ -43,7 +43,30 @@ pub enum GridKind {
     /// Optimized recursive grid: Algorithms 1–2 with `alpha`, sub-grids of λ·N_i/β cells, no
     /// subdivision when the prospective sub-grid has fewer than `gamma` cells, `max_depth` levels;
     /// `beta` and `gamma_test` say how the two ambiguous rules of seed 002 §2 are read.
-    Org { lambda: f32, alpha: f32, gamma: u32, max_depth: u32, beta: BetaRule, gamma_test: GammaTest },
+    ///
+    /// `lambda` sets the top grid's density, `leaf_lambda` the sub-grids' (the paper's one λ for
+    /// both by default); `cell_test` how triangles are listed.
+    Org {
+        lambda: f32,
+        leaf_lambda: f32,
+        alpha: f32,
+        gamma: u32,
+        max_depth: u32,
+        beta: BetaRule,
+        gamma_test: GammaTest,
+        cell_test: CellTest,
+    },
+}
+
+/// Which cells a triangle is listed in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CellTest {
+    /// Every cell its bounding box overlaps (seed 002; every kind's default).
+    Bbox,
+    /// Only the cells the triangle itself meets (separating-axis triangle/box test): fewer
+    /// references and fewer ray/triangle tests, for a slower build.
+    Sat,
 }
 
 /// Where ORG's pointer ratio β (seed 002 §2) comes from. The paper gives two: its derivation
@@ -95,12 +118,22 @@ impl GridKind {
     /// readings `org` builds by default.
     pub const ORG_PAPER: GridKind = GridKind::Org {
         lambda: 1.0,
+        leaf_lambda: 1.0,
         alpha: 2.0,
         gamma: 16,
         max_depth: build::MAX_DEPTH,
         beta: BetaRule::Level,
         gamma_test: GammaTest::Reduced,
+        cell_test: CellTest::Bbox,
     };
+
+    /// The triangle/cell test this kind lists triangles by.
+    pub fn cell_test(&self) -> CellTest {
+        match *self {
+            GridKind::Org { cell_test, .. } => cell_test,
+            _ => CellTest::Bbox,
+        }
+    }
 }
 
 /// What one level of the hierarchy holds, for the report (seed 002 §2's per-level accounting).
@@ -183,7 +216,10 @@ impl Structure for Grid {
     fn params(&self) -> serde_json::Value {
         serde_json::json!({
             "grid": self.kind,
-            "triangle_cell_test": "bounding box",
+            "triangle_cell_test": match self.kind.cell_test() {
+                CellTest::Bbox => "bounding box",
+                CellTest::Sat => "separating axis (exact)",
+            },
             "levels": self.levels,
             "budget_stop": self.budget_stop,
         })

@@ -152,6 +152,84 @@ fn org_reduces_each_sub_grid_by_its_levels_pointer_ratio() {
     }
 }
 
+/// The references of the leaf cell holding `p` (descending through sub-grids), or `None` when
+/// `p` lies within a relative 1e-5 of a cell boundary on the way down (then either side may list
+/// what touches it).
+fn leaf_refs_at(g: &Grid, p: Vec3) -> Option<&[u32]> {
+    let mut h = &g.headers[0];
+    loop {
+        let mut idx = [0u32; 3];
+        for a in 0..3 {
+            if h.cell_size[a] <= 0.0 {
+                continue;
+            }
+            let q = (p[a] - h.min[a]) / h.cell_size[a];
+            let i = q.floor().clamp(0.0, (h.res[a] - 1) as f32);
+            if (q - q.round()).abs() < 1e-5 * q.abs().max(1.0) && q > 0.5 && q < h.res[a] as f32 - 0.5 {
+                return None;
+            }
+            idx[a] = i as u32;
+        }
+        let first = (h.first_cell + h.cell_index(idx[0], idx[1], idx[2])) as usize;
+        let refs = &g.refs[g.cells[first] as usize..g.cells[first + 1] as usize];
+        match refs {
+            &[link] if link & SUBGRID_BIT != 0 => h = &g.headers[(link & !SUBGRID_BIT) as usize],
+            _ => return Some(refs),
+        }
+    }
+}
+
+#[test]
+fn exact_cell_lists_keep_every_cell_a_triangle_meets_and_drop_some_others() {
+    // org.cell_test=sat: each triangle is listed in the leaf cell of every point on it (sampled
+    // inside, on edges and at vertices), and the lists are shorter than the bounding-box ones.
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+    for scene_name in ["dragon-11k", "terrain", "flat"] {
+        let scene = scenes::load_scene(scene_name).expect("loads");
+        let params = Params::parse(["org.lambda=0.125", "org.leaf_lambda=2", "org.cell_test=sat"]).expect("parses");
+        let kind = GridKind::from_params("org", &params).expect("valid");
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let exact = build(&input, kind).expect("builds");
+        exact.validate().expect("valid layout");
+        let GridKind::Org { cell_test, .. } = kind else { unreachable!() };
+        assert_eq!(cell_test, super::CellTest::Sat);
+        let bbox_kind =
+            GridKind::from_params("org", &Params::parse(["org.lambda=0.125", "org.leaf_lambda=2"]).unwrap()).unwrap();
+        let by_bbox = build(&input, bbox_kind).expect("builds");
+        assert!(
+            exact.triangle_ref_count() < by_bbox.triangle_ref_count(),
+            "{scene_name}: exact lists {} references, bounding boxes {}",
+            exact.triangle_ref_count(),
+            by_bbox.triangle_ref_count()
+        );
+        let mut checked = 0;
+        for (t, tri) in scene.triangles().iter().enumerate() {
+            for k in 0..6 {
+                let w: [f32; 3] = match k {
+                    0..3 => {
+                        let mut w = [0.0; 3];
+                        w[k] = 1.0;
+                        w
+                    }
+                    3 => [0.5, 0.5, 0.0],
+                    _ => {
+                        let (a, b): (f32, f32) = (rng.random(), rng.random());
+                        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                        [1.0 - a - b, a, b]
+                    }
+                };
+                let p = tri[0] * w[0] + tri[1] * w[1] + tri[2] * w[2];
+                if let Some(refs) = leaf_refs_at(&exact, p) {
+                    assert!(refs.contains(&(t as u32)), "{scene_name}: triangle {t} missing from the cell of {p}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > scene.triangles().len() * 4, "{scene_name}: only {checked} points checked");
+    }
+}
+
 #[test]
 fn rg_on_the_flat_scene_stops_at_the_reference_budget() {
     let (_, g) = grid("flat", GridKind::Rg { lambda: 1.0, gamma: 16, max_depth: 3 });
