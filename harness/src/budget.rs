@@ -143,10 +143,12 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
             // and the sub-grids' bounded from above. With β = top references per triangle, RG's
             // level k holds at most about β^k times the top's (seed 002 §2; its γ cut-off often
             // stops far earlier: menger's RG never subdivides), RG-2's second level, 8 cells per
-            // top reference, at most 8·β³ times; both capped by the builder's MAX_REFS. ORG's
-            // β-controlled levels stayed within its top references again. Measured on every
+            // top reference, at most 8·β³ times; both capped by the builder's MAX_REFS. Measured on every
             // built-in scene, estimate/peak: UG 1.14–1.40, ORG 1.42–2.48, RG 2.1–48, RG-2 2.6–118
             // (never under: an RG that explodes, as on grass and flat, is the case to catch).
+            // ORG re-measured after issue 16's β reading and leaf density: 1.22–3.04 with the
+            // paper's defaults (every built-in scene), 1.25–1.58 for the org-fast preset's
+            // `fast` variant (its five scenes).
             let Ok(kind) = structures::grid::GridKind::from_params(structure, input.params) else { return 0 };
             let (cells, refs) = structures::grid::build::estimate_top(&input.triangles, kind);
             let (cells, refs) = (cells as f64, refs as f64);
@@ -154,7 +156,13 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
             let cap = structures::grid::MAX_REFS as f64;
             let (sub_cells, sub_refs) = match kind {
                 GridKind::Ug { .. } => (0.0, 0.0),
-                GridKind::Org { .. } => (0.0, refs.min(cap)),
+                // The paper's reading (β from the parent level) holds about 1.4× the top's
+                // references in level 2 on the dragon; denser leaves than top (`org.leaf_lambda`)
+                // hold more, about with the cube root of the density ratio.
+                GridKind::Org { lambda, leaf_lambda, .. } => {
+                    let denser = f64::from(leaf_lambda / lambda).max(1.0).cbrt();
+                    (0.0, (1.5 * refs * denser).min(cap))
+                }
                 GridKind::Rg { max_depth, .. } => {
                     let growth: f64 = (1..max_depth.max(1) as i32).map(|k| beta.powi(k)).sum();
                     (0.0, (refs * growth).min(cap))

@@ -107,12 +107,17 @@ impl GridHeader {
 pub fn occupancy(h: &GridHeader, offsets: &[u32]) -> Vec<u32> {
     let [bx, by, _] = h.brick_res();
     let mut words = vec![0u32; h.brick_words() as usize];
-    let (rx, ry) = (h.res[0], h.res[1]);
-    for c in 0..h.cell_count() {
-        if offsets[c as usize] != offsets[c as usize + 1] {
-            let [x, y, z] = [c % rx, (c / rx) % ry, c / (rx * ry)].map(|i| i >> BRICK_SHIFT);
-            let b = x + bx * (y + by * z);
-            words[(b / 32) as usize] |= 1 << (b % 32);
+    let mut c = 0usize;
+    for z in 0..h.res[2] {
+        for y in 0..h.res[1] {
+            let row = bx * ((y >> BRICK_SHIFT) + by * (z >> BRICK_SHIFT));
+            for x in 0..h.res[0] {
+                if offsets[c] != offsets[c + 1] {
+                    let b = row + (x >> BRICK_SHIFT);
+                    words[(b / 32) as usize] |= 1 << (b % 32);
+                }
+                c += 1;
+            }
         }
     }
     words

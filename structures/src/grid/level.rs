@@ -73,18 +73,16 @@ pub(super) struct Footprint<'a> {
 }
 
 /// Calls `f` with every cell of `lo..=hi` that triangle `t` is listed in.
+#[inline(always)]
 fn for_each_cell(h: &GridHeader, t: u32, lo: [u32; 3], hi: [u32; 3], fp: Footprint, mut f: impl FnMut(usize)) {
-    let exact = fp.exact.map(|tris| &tris[t as usize]);
+    // A triangle whose widened box lies in one cell meets that cell: no test needed.
+    let exact = fp.exact.filter(|_| lo != hi).map(|tris| &tris[t as usize]);
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
             for x in lo[0]..=hi[0] {
-                if let Some(tri) = exact
-                    && lo != hi
-                    && !overlaps_cell(tri, h, [x, y, z])
-                {
-                    continue;
+                if exact.is_none_or(|tri| overlaps_cell(tri, h, [x, y, z])) {
+                    f(h.cell_index(x, y, z) as usize);
                 }
-                f(h.cell_index(x, y, z) as usize);
             }
         }
     }
