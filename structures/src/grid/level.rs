@@ -72,15 +72,77 @@ pub(super) struct Footprint<'a> {
     pub exact: Option<&'a [Triangle]>,
 }
 
-/// Calls `f` with every cell of `lo..=hi` that triangle `t` is listed in.
-#[inline(always)]
-fn for_each_cell(h: &GridHeader, t: u32, lo: [u32; 3], hi: [u32; 3], fp: Footprint, mut f: impl FnMut(usize)) {
-    // A triangle whose widened box lies in one cell meets that cell: no test needed.
-    let exact = fp.exact.filter(|_| lo != hi).map(|tris| &tris[t as usize]);
+/// Which cells of its range a triangle is listed in, worked out once per grid and used by both
+/// the count and the fill pass (the exact test is the costly part of an exact build).
+#[derive(Clone, Copy)]
+enum Listing {
+    /// Every cell of the range: bounding-box lists, or a range of one cell (a triangle whose
+    /// widened box lies in one cell meets that cell).
+    All,
+    /// One bit per cell of the range, x fastest, for ranges of at most 64 cells.
+    Mask(u64),
+    /// The exact test in each pass again (a range of more than 64 cells).
+    Test,
+}
+
+/// The [`Listing`] of triangle `t` over its range `lo..=hi`.
+fn listing(h: &GridHeader, t: u32, lo: [u32; 3], hi: [u32; 3], fp: Footprint) -> Listing {
+    let Some(tris) = fp.exact else { return Listing::All };
+    if lo == hi {
+        return Listing::All;
+    }
+    if range_cells(lo, hi) > 64 {
+        return Listing::Test;
+    }
+    let tri = &tris[t as usize];
+    let (mut mask, mut bit) = (0u64, 0);
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
             for x in lo[0]..=hi[0] {
-                if exact.is_none_or(|tri| overlaps_cell(tri, h, [x, y, z])) {
+                mask |= u64::from(overlaps_cell(tri, h, [x, y, z])) << bit;
+                bit += 1;
+            }
+        }
+    }
+    Listing::Mask(mask)
+}
+
+/// The listings of `tris` for the exact test, empty for bounding-box lists (then every listing
+/// is [`Listing::All`]).
+fn listings(h: &GridHeader, tris: &[u32], fp: Footprint, parallel: bool) -> Vec<Listing> {
+    let one = |&t: &u32| {
+        let (lo, hi) = cell_range(h, &fp.bboxes[t as usize]);
+        listing(h, t, lo, hi, fp)
+    };
+    match fp.exact {
+        None => Vec::new(),
+        Some(_) if parallel => tris.par_iter().map(one).collect(),
+        Some(_) => tris.iter().map(one).collect(),
+    }
+}
+
+/// Calls `f` with every cell of `lo..=hi` that triangle `t` is listed in.
+#[inline(always)]
+fn for_each_cell(
+    h: &GridHeader,
+    t: u32,
+    lo: [u32; 3],
+    hi: [u32; 3],
+    fp: Footprint,
+    listing: Listing,
+    mut f: impl FnMut(usize),
+) {
+    let mut bit = 0;
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            for x in lo[0]..=hi[0] {
+                let listed = match listing {
+                    Listing::All => true,
+                    Listing::Mask(mask) => mask >> bit & 1 != 0,
+                    Listing::Test => fp.exact.is_none_or(|tris| overlaps_cell(&tris[t as usize], h, [x, y, z])),
+                };
+                bit += 1;
+                if listed {
                     f(h.cell_index(x, y, z) as usize);
                 }
             }
@@ -136,11 +198,13 @@ pub(super) fn build_level(header: GridHeader, tris: &[u32], fp: Footprint, paral
 }
 
 fn build_sequential(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -> LevelGrid {
+    let ranges: Vec<([u32; 3], [u32; 3])> = tris.iter().map(|&t| cell_range(&header, &fp.bboxes[t as usize])).collect();
+    let listings = listings(&header, tris, fp, false);
+    let listing = |i: usize| listings.get(i).copied().unwrap_or(Listing::All);
     // Count pass.
     let mut offsets = vec![0u32; m + 1];
-    let ranges: Vec<([u32; 3], [u32; 3])> = tris.iter().map(|&t| cell_range(&header, &fp.bboxes[t as usize])).collect();
-    for (&t, &(lo, hi)) in tris.iter().zip(&ranges) {
-        for_each_cell(&header, t, lo, hi, fp, |c| offsets[c + 1] += 1);
+    for (i, (&t, &(lo, hi))) in tris.iter().zip(&ranges).enumerate() {
+        for_each_cell(&header, t, lo, hi, fp, listing(i), |c| offsets[c + 1] += 1);
     }
     // Prefix sum.
     for c in 0..m {
@@ -149,8 +213,8 @@ fn build_sequential(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -
     // Fill pass.
     let mut cursor = offsets.clone();
     let mut refs = vec![0u32; offsets[m] as usize];
-    for (&t, &(lo, hi)) in tris.iter().zip(&ranges) {
-        for_each_cell(&header, t, lo, hi, fp, |c| {
+    for (i, (&t, &(lo, hi))) in tris.iter().zip(&ranges).enumerate() {
+        for_each_cell(&header, t, lo, hi, fp, listing(i), |c| {
             refs[cursor[c] as usize] = t;
             cursor[c] += 1;
         });
@@ -159,11 +223,13 @@ fn build_sequential(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -
 }
 
 fn build_parallel(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -> LevelGrid {
+    let listings = listings(&header, tris, fp, true);
+    let listing = |i: usize| listings.get(i).copied().unwrap_or(Listing::All);
     // Count pass.
     let counts: Vec<AtomicU32> = (0..m).map(|_| AtomicU32::new(0)).collect();
-    tris.par_iter().for_each(|&t| {
+    tris.par_iter().enumerate().for_each(|(i, &t)| {
         let (lo, hi) = cell_range(&header, &fp.bboxes[t as usize]);
-        for_each_cell(&header, t, lo, hi, fp, |c| {
+        for_each_cell(&header, t, lo, hi, fp, listing(i), |c| {
             counts[c].fetch_add(1, Ordering::Relaxed);
         });
     });
@@ -180,9 +246,9 @@ fn build_parallel(header: GridHeader, m: usize, tris: &[u32], fp: Footprint) -> 
         cursor.store(offsets[c], Ordering::Relaxed);
     }
     let slots: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
-    tris.par_iter().for_each(|&t| {
+    tris.par_iter().enumerate().for_each(|(i, &t)| {
         let (lo, hi) = cell_range(&header, &fp.bboxes[t as usize]);
-        for_each_cell(&header, t, lo, hi, fp, |c| {
+        for_each_cell(&header, t, lo, hi, fp, listing(i), |c| {
             let slot = counts[c].fetch_add(1, Ordering::Relaxed);
             slots[slot as usize].store(t, Ordering::Relaxed);
         });
