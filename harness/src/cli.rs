@@ -261,10 +261,6 @@ const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat
 /// the paper's method (Algorithms 1–2, β, γ, MAXDEPTH).
 pub const ORG_FAST: &[&str] = &["org.lambda=0.125", "org.leaf_lambda=2", "org.cell_test=sat"];
 
-fn vec_of(params: &[&str]) -> Vec<String> {
-    params.iter().map(|p| p.to_string()).collect()
-}
-
 impl Preset {
     pub fn name(self) -> &'static str {
         match self {
@@ -292,7 +288,9 @@ impl Preset {
             // Tables 1–2 at 512³ and 1024³ (the paper's 1000³).
             (Preset::SvdagTables, "svo" | "esvo") => (9..=10).map(|l| at(l, &[], None)).collect(),
             // Table 3's 128³…2048³ in the seed's encoding; Kämpe's bricks where storage is compared.
-            (Preset::OrgFast, "org") => vec![(Vec::new(), None), (vec_of(ORG_FAST), Some("fast".into()))],
+            (Preset::OrgFast, "org") => {
+                vec![(Vec::new(), None), (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into()))]
+            }
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))

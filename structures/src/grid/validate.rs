@@ -1,7 +1,7 @@
 //! Structural checks of a built grid, for the builder's debug assertions and the tests.
 
 use super::Grid;
-use super::layout::{BRICK_SHIFT, SUBGRID_BIT};
+use super::layout::{SUBGRID_BIT, occupancy};
 
 impl Grid {
     /// Checks the layout's invariants: each grid's offsets are a prefix sum inside `refs`; every
@@ -20,20 +20,15 @@ impl Grid {
             if offsets.windows(2).any(|w| w[0] > w[1]) || offsets[m] as usize > self.refs.len() {
                 return Err(format!("grid {g}: offsets are not a prefix sum inside refs"));
             }
-            let [bx, by, _] = h.brick_res();
             let words = self
                 .bricks
                 .get(h.first_brick as usize..(h.first_brick + h.brick_words()) as usize)
                 .ok_or(format!("grid {g}: brick words out of range"))?;
-            let mut occupied = vec![0u32; words.len()];
+            if words != occupancy(h, offsets) {
+                return Err(format!("grid {g}: brick occupancy bits differ from its cells"));
+            }
             for c in 0..m {
                 let refs = &self.refs[offsets[c] as usize..offsets[c + 1] as usize];
-                if !refs.is_empty() {
-                    let (rx, ry) = (h.res[0], h.res[1]);
-                    let idx = [c as u32 % rx, (c as u32 / rx) % ry, c as u32 / (rx * ry)].map(|i| i >> BRICK_SHIFT);
-                    let b = idx[0] + bx * (idx[1] + by * idx[2]);
-                    occupied[(b / 32) as usize] |= 1 << (b % 32);
-                }
                 for &r in refs {
                     if r & SUBGRID_BIT == 0 {
                         *listed.get_mut(r as usize).ok_or(format!("grid {g} cell {c}: triangle {r} out of range"))? =
@@ -58,9 +53,6 @@ impl Grid {
                         }
                     }
                 }
-            }
-            if occupied != words {
-                return Err(format!("grid {g}: brick occupancy bits differ from its cells"));
             }
         }
         if let Some(g) = (1..linked.len()).find(|&g| linked[g] != 1) {
