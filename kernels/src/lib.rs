@@ -53,6 +53,22 @@ pub trait Traverse: Send + Sync {
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.intersect(ray, t_min, t_max).is_some()
     }
+    /// The primary ray `ray` of `camera`'s pixel, from `t_min`: a structure with level of detail
+    /// (ESVO's `esvo.lod_pixels`, seed 000 §6) stops where its detail is finer than the pixel;
+    /// the others trace it as any ray. Counts its work into `counters` when given.
+    fn intersect_primary(
+        &self,
+        camera: &Camera,
+        ray: &Ray,
+        t_min: f32,
+        counters: Option<&mut Counters>,
+    ) -> Option<Hit> {
+        let _ = camera;
+        match counters {
+            None => self.intersect(ray, t_min, f32::INFINITY),
+            Some(c) => self.intersect_counted(ray, t_min, f32::INFINITY, c),
+        }
+    }
     /// An optional per-frame pre-pass for primary rays: per pixel (row-major), a distance the
     /// pixel's ray may start from (ESVO's beam optimisation, seed 000 §6.2). Its work is added to
     /// `counters` when given. `None`: rays start at 0.

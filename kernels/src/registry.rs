@@ -135,12 +135,14 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "esvo",
         family: "voxel",
         summary: "Laine & Karras ESVO: child descriptors, far pointers, page headers, contours, attachments; \
-                  --levels L --contours on|off --attributes raw|compressed --beam on|off",
+                  --levels L --contours on|off --attributes raw|compressed --beam on|off; \
+                  esvo.lod_pixels=P stops primary rays at voxels under P pixels",
         params: &[
             "voxel.levels",
             "esvo.attributes",
             "esvo.beam",
             "esvo.beam_block",
+            "esvo.block_words",
             "esvo.contours",
             "esvo.contour_inherited",
             "esvo.contour_max_ratio",

@@ -116,17 +116,21 @@ fn compare(
 }
 
 /// ESVO's switches beyond the defaults the per-scene test builds with: the beam pre-pass (a second
-/// dispatch on the GPU, `beam_starts` on the CPU), contours off, raw attributes.
+/// dispatch on the GPU, `beam_starts` on the CPU), contours off, raw attributes, many small
+/// blocks, and level of detail for primary rays.
 #[test]
 fn esvo_variants() {
     let Some(ctx) = context_for_tests("gpu::esvo_variants") else {
         return;
     };
     let entry = kernels::find_structure("esvo").expect("esvo is registered");
-    let variants: [(&str, &[&str]); 3] = [
+    let variants: [(&str, &[&str]); 5] = [
         ("esvo+beam", &["esvo.beam=on"]),
         ("esvo-ctr", &["esvo.contours=off", "esvo.beam=on"]),
         ("esvo-raw", &["esvo.attributes=raw"]),
+        // Many blocks: far pointers into other blocks, before and after the descriptor.
+        ("esvo-blk", &["esvo.block_words=1024"]),
+        ("esvo-lod", &["esvo.lod_pixels=2"]),
     ];
     let mut failures = Vec::new();
     for name in ["bunny", "dragon-11k", "menger", "stadium"] {

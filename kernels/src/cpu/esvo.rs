@@ -24,7 +24,6 @@ use crate::{Counters, Hit, NoStats, Stats, Traverse};
 struct Descriptors<'a> {
     words: &'a [u32],
     root: u32,
-    contour_base: usize,
 }
 
 impl CastNodes for Descriptors<'_> {
@@ -52,14 +51,17 @@ impl CastNodes for Descriptors<'_> {
     fn child(&self, node: u32, d: &[u32; 2], slot: u32, _scale: u32) -> u32 {
         let mut offset = child_ptr(d[0]);
         if is_far(d[0]) {
+            // A far pointer is a signed slot offset from the descriptor: it may lead into another
+            // block, before or after this one (the trunk points back at the sub-cubes).
             offset = self.words[(node + offset) as usize * 2];
         }
-        node + offset + rank(valid_mask(d[0]) & !leaf_mask(d[0]), slot)
+        node.wrapping_add(offset) + rank(valid_mask(d[0]) & !leaf_mask(d[0]), slot)
     }
     #[inline(always)]
-    fn contour(&self, _node: u32, d: &[u32; 2], slot: u32) -> Option<u32> {
+    fn contour(&self, node: u32, d: &[u32; 2], slot: u32) -> Option<u32> {
+        // The contour pointer counts words from the descriptor to its block's contour data.
         let mask = contour_mask(d[1]);
-        (mask >> slot & 1 == 1).then(|| self.words[self.contour_base + (contour_ptr(d[1]) + rank(mask, slot)) as usize])
+        (mask >> slot & 1 == 1).then(|| self.words[node as usize * 2 + (contour_ptr(d[1]) + rank(mask, slot)) as usize])
     }
 }
 
@@ -94,7 +96,7 @@ fn cast_ray<S: Stats>(
     let oray = esvo.grid.to_octree_space(ray);
     let r = OctreeRay::from_octree_space(&oray);
     let options = CastOptions { contours: contours && esvo.params.contours, lod_k: lod_k / esvo.grid.size };
-    let nodes = Descriptors { words: &esvo.words, root: esvo.root_slot, contour_base: esvo.contour_word as usize };
+    let nodes = Descriptors { words: &esvo.words, root: esvo.root_slot };
     // Only the box the leaves occupy can hold a hit: the caster starts at its entry and gives up
     // past its exit (the same as a ray's own t_min, t_max; hits and t are unchanged).
     let (enter, exit) = r.box_span(esvo.occupied[0], esvo.occupied[1]);
@@ -102,8 +104,8 @@ fn cast_ray<S: Stats>(
 }
 
 /// The normal of child `slot` of the descriptor at `desc_slot`, found as Fig. 8 does: the page
-/// header (clear the address's low bits) leads to the info section, whose directory leads to
-/// the attachment.
+/// header (clear the address's low bits) leads to its block's info section, whose directory leads
+/// to the block's attachment.
 pub fn attribute_normal(esvo: &Esvo, desc_slot: u32, slot: u32) -> Vec3 {
     let w = &esvo.words;
     let page_word = page_of(desc_slot as usize) * 2;
@@ -118,8 +120,9 @@ pub fn attribute_normal(esvo: &Esvo, desc_slot: u32, slot: u32) -> Vec3 {
             if mask >> slot & 1 == 0 {
                 return Vec3::ZERO;
             }
-            // Value pointers count 64-bit values from the end of the lookup array.
-            let lookups = (esvo.info_word / 2) as usize;
+            // Value pointers count 64-bit values from the end of the lookup array, which has an
+            // entry per slot of the block's descriptor array.
+            let lookups = (info - block) / 2;
             let value = (entry >> VALUE_PTR_SHIFT) + rank(mask, slot);
             decode_normal(w[attach + lookups + value as usize * 2 + 1])
         }
@@ -132,11 +135,16 @@ pub fn attribute_normal(esvo: &Esvo, desc_slot: u32, slot: u32) -> Vec3 {
     }
 }
 
-fn trace<S: Stats>(esvo: &Esvo, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    // LOD termination is in the caster (`lod_k`) and used by the beam pass; primary rays
-    // traverse to the leaves (`esvo.lod_pixels` is not wired to a camera yet).
-    let h = cast_ray(esvo, ray, t_min, t_max, true, 0.0, stats)?;
+/// Casts to the leaves, or with `lod_k` > 0 (world size per unit distance) to the first voxel at
+/// most that small for its distance; a voxel above the leaves has its children's mean attributes.
+fn trace<S: Stats>(esvo: &Esvo, ray: &Ray, t_min: f32, t_max: f32, lod_k: f32, stats: &mut S) -> Option<Hit> {
+    let h = cast_ray(esvo, ray, t_min, t_max, true, lod_k, stats)?;
     Some(Hit { t: h.t, normal: attribute_normal(esvo, h.parent, h.slot), prim: morton::encode(h.coords) })
+}
+
+/// The LOD constant of `camera`'s primary rays: `esvo.lod_pixels` pixels per unit distance.
+pub fn primary_lod_k(esvo: &Esvo, camera: &Camera) -> f32 {
+    esvo.params.lod_pixels * camera.pixel_angle()
 }
 
 /// The beam pre-pass (§6.2): rays through the corners of `block`×`block` pixel blocks, cubes
@@ -175,11 +183,25 @@ pub fn beam_starts<S: Stats>(esvo: &Esvo, camera: &Camera, stats: &mut S) -> Vec
 
 impl Traverse for Esvo {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        trace(self, ray, t_min, t_max, 0.0, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        trace(self, ray, t_min, t_max, 0.0, counters)
+    }
+
+    fn intersect_primary(
+        &self,
+        camera: &Camera,
+        ray: &Ray,
+        t_min: f32,
+        counters: Option<&mut Counters>,
+    ) -> Option<Hit> {
+        let lod_k = primary_lod_k(self, camera);
+        match counters {
+            None => trace(self, ray, t_min, f32::INFINITY, lod_k, &mut NoStats),
+            Some(c) => trace(self, ray, t_min, f32::INFINITY, lod_k, c),
+        }
     }
 
     fn primary_starts(&self, camera: &Camera, counters: Option<&mut Counters>) -> Option<Vec<f32>> {

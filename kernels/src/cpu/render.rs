@@ -280,20 +280,6 @@ fn tile_pixel(corner: (u32, u32), i: usize) -> (u32, u32) {
 }
 
 #[inline]
-fn cast(
-    accel: &dyn Traverse,
-    ray: &Ray,
-    t_min: f32,
-    t_max: f32,
-    counters: &mut Option<&mut Counters>,
-) -> Option<crate::Hit> {
-    match counters {
-        None => accel.intersect(ray, t_min, t_max),
-        Some(c) => accel.intersect_counted(ray, t_min, t_max, c),
-    }
-}
-
-#[inline]
 fn occluded(accel: &dyn Traverse, ray: &Ray, t_max: f32, counters: &mut Option<&mut Counters>) -> bool {
     match counters {
         None => accel.occluded(ray, 0.0, t_max),
@@ -313,7 +299,7 @@ fn shade_pixel(
     mut counters: Option<&mut Counters>,
 ) -> Sample {
     let ray = camera.ray(x, y);
-    let hit = cast(accel, &ray, t_start, f32::INFINITY, &mut counters);
+    let hit = accel.intersect_primary(camera, &ray, t_start, counters.as_deref_mut());
     shade_hit(accel, camera, ctx, workload, x, y, &ray, hit, &mut counters)
 }
 

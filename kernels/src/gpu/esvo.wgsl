@@ -10,7 +10,9 @@
 // section, contours, attachments), uploaded as built.
 
 const ESVO_ROOT: u32 = 5u;
-const ESVO_CONTOUR_BASE: u32 = 6u;
+// Primary rays' LOD constant in octree units per unit distance (lod_pixels · pixel angle / grid
+// size, f32 bits; 0: off).
+const ESVO_LOD: u32 = 6u;
 // Bit 0: non-empty; bit 1: intersect contours; bit 2: beam pre-pass ran.
 const ESVO_FLAGS: u32 = 7u;
 const ESVO_BEAM_BLOCK: u32 = 8u;
@@ -42,7 +44,8 @@ fn rank(mask: u32, slot: u32) -> u32 {
     return countOneBits(mask & ((1u << slot) - 1u));
 }
 
-// Bits 17..31 hold the relative child pointer; bit 16 says it points at a 32-bit far pointer.
+// Bits 17..31 hold the relative child pointer; bit 16 says it points at a 32-bit far pointer, a
+// signed slot offset from the descriptor that may lead into another block (u32 addition wraps).
 fn node_child(node: u32, desc: vec2<u32>, slot: u32, scale: u32) -> u32 {
     var offset = desc.x >> 17u;
     if ((desc.x & (1u << 16u)) != 0u) {
@@ -53,13 +56,14 @@ fn node_child(node: u32, desc: vec2<u32>, slot: u32, scale: u32) -> u32 {
     return node + offset + rank(valid & ~leaf, slot);
 }
 
-// Bits 8..31 of the second word: the contour pointer; bits 0..7: the contour mask.
+// Bits 8..31 of the second word: the contour pointer, in words from the descriptor to its
+// block's contour data; bits 0..7: the contour mask.
 fn node_contour(node: u32, desc: vec2<u32>, slot: u32) -> ContourRef {
     let mask = desc.y & 0xffu;
     if (((mask >> slot) & 1u) == 0u) {
         return ContourRef(false, 0u);
     }
-    return ContourRef(true, words(params(ESVO_CONTOUR_BASE) + (desc.y >> 8u) + rank(mask, slot)));
+    return ContourRef(true, words(2u * node + (desc.y >> 8u) + rank(mask, slot)));
 }
 
 fn occupied_corner(first: u32) -> vec3<f32> {
@@ -131,5 +135,5 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     if ((flags & 4u) != 0u) {
         t_min = max(t_min, beam_start(pixel_of(index)));
     }
-    return voxel_trace_result(esvo_cast(ray, t_min, (flags & 2u) != 0u, 0.0));
+    return voxel_trace_result(esvo_cast(ray, t_min, (flags & 2u) != 0u, bitcast<f32>(params(ESVO_LOD))));
 }

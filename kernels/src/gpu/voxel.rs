@@ -70,7 +70,7 @@ pub fn esvo<'a>(esvo: &'a Esvo, camera: &Camera) -> GpuProgram<'a> {
     let mut p = grid_words(&esvo.grid);
     p.extend([
         esvo.root_slot,
-        esvo.contour_word,
+        (esvo.params.lod_pixels * camera.pixel_angle() / esvo.grid.size).to_bits(),
         flags,
         b,
         (beam_k / esvo.grid.size).to_bits(),

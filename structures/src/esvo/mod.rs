@@ -49,8 +49,12 @@ pub struct EsvoParams {
     pub beam: bool,
     /// Beam block size in pixels (8×8 or 4×4).
     pub beam_block: u32,
-    /// LOD: stop at voxels under this many pixels (0 = off, traverse to the leaves).
+    /// LOD for primary rays: stop at voxels whose projection is at most this many pixels
+    /// (0 = off, traverse to the leaves; seed 000 §6).
     pub lod_pixels: f32,
+    /// The most words of descriptors and contours a block may hold (its contour pointers' reach,
+    /// 2^24 − 1, by default; smaller values force many blocks, for tests).
+    pub block_words: u32,
 }
 
 impl Default for EsvoParams {
@@ -64,9 +68,13 @@ impl Default for EsvoParams {
             beam: false,
             beam_block: 8,
             lod_pixels: 0.0,
+            block_words: layout::CONTOUR_PTR_MAX,
         }
     }
 }
+
+/// The smallest `esvo.block_words`: a block must hold any one group with its contours.
+pub const MIN_BLOCK_WORDS: u32 = 1024;
 
 fn on_off(params: &crate::Params, key: &str, default: bool) -> Result<bool, BuildError> {
     match params.get(key, if default { "on".to_string() } else { "off".to_string() })?.as_str() {
@@ -103,6 +111,13 @@ impl EsvoParams {
                 });
             }
         }
+        let block_words = params.get("esvo.block_words", d.block_words)?;
+        if !(MIN_BLOCK_WORDS..=d.block_words).contains(&block_words) {
+            return Err(BuildError::BadParam {
+                key: "esvo.block_words".into(),
+                detail: format!("{block_words} is outside {MIN_BLOCK_WORDS}..={} words", d.block_words),
+            });
+        }
         Ok(Self {
             level: voxel::level_param(params)?,
             contours: on_off(params, "esvo.contours", d.contours)?,
@@ -112,6 +127,7 @@ impl EsvoParams {
             beam: on_off(params, "esvo.beam", d.beam)?,
             beam_block,
             lod_pixels,
+            block_words,
         })
     }
 }
@@ -129,6 +145,16 @@ pub struct EsvoStats {
     pub leaf_voxels: u64,
     /// All voxels, interior included (the paper's per-voxel denominator).
     pub voxels: u64,
+    /// Contours the fitter produced; every one is stored (the build fails otherwise).
+    pub contours_fitted: u64,
+    /// Blocks (§5.1), the largest one's bytes, their info sections' bytes and the padding that
+    /// starts each block's descriptors on a page.
+    pub blocks: u64,
+    pub largest_block_bytes: u64,
+    pub info_bytes: u64,
+    pub block_padding_bytes: u64,
+    /// The sub-cubes the build converted one at a time form a `2^subcube_level` grid.
+    pub subcube_level: u32,
     pub colour_bytes: u64,
     pub normal_bytes: u64,
     pub lookup_bytes: u64,
@@ -143,14 +169,11 @@ pub struct EsvoStats {
 #[derive(Clone, Debug)]
 pub struct Esvo {
     pub grid: VoxelGrid,
-    /// Descriptor array, info section, contour data and attachment, in one array (uploaded as is).
+    /// The blocks, each a page-aligned descriptor array, its info section, contour data and
+    /// attachment, in one array (uploaded as is).
     pub words: Vec<u32>,
-    /// Slot of the root's descriptor.
+    /// Slot of the root's descriptor (in the last block: the trunk is emitted last).
     pub root_slot: u32,
-    /// Word offsets of the info section, the contour data and the attachment.
-    pub info_word: u32,
-    pub contour_word: u32,
-    pub attach_word: u32,
     pub attributes: Attributes,
     /// The box every leaf voxel lies in, in octree space (`[1, 2]³`, world-oriented), on the
     /// grid of the leaves' parents: the caster clips each ray to it before descending, so rays
@@ -163,7 +186,7 @@ pub struct Esvo {
 
 impl Esvo {
     pub fn build(input: &BuildInput) -> Result<Self, BuildError> {
-        Ok(build::build(input.scene, EsvoParams::from_params(input.params)?))
+        build::build(input.scene, EsvoParams::from_params(input.params)?)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -190,7 +213,8 @@ impl Structure for Esvo {
             .with("far_pointers", s.far_pointers * 8)
             .with("page_headers", s.page_headers * 8)
             .with("padding", s.padding_slots * 8)
-            .with("info", ((self.contour_word - self.info_word) * 4) as u64)
+            .with("info", s.info_bytes)
+            .with("block_padding", s.block_padding_bytes)
             .with("contours", contours)
             .with("attr_lookup", s.lookup_bytes)
             .with("colour", s.colour_bytes)

@@ -84,12 +84,23 @@ pub struct OctreeBuilder {
     levels: Vec<OctreeLevel>,
     open: Vec<Option<OpenVoxel>>,
     last_leaf: Option<u64>,
+    /// The level of the subtree's root: levels above it stay empty (see [`OctreeBuilder::subtree`]).
+    top: usize,
 }
 
 impl OctreeBuilder {
     pub fn new(grid: VoxelGrid) -> Self {
         let n = grid.level as usize + 1;
-        Self { grid, levels: vec![OctreeLevel::default(); n], open: vec![None; n], last_leaf: None }
+        Self { grid, levels: vec![OctreeLevel::default(); n], open: vec![None; n], last_leaf: None, top: 0 }
+    }
+
+    /// A builder of the subtree under one voxel at level `top`: every leaf pushed must lie in that
+    /// voxel's cube. The result keeps the grid's level numbering, with levels above `top` empty
+    /// and the subtree's root alone at level `top` (ESVO's build converts the voxeliser's
+    /// sub-cubes one at a time this way).
+    pub fn subtree(grid: VoxelGrid, top: u32) -> Self {
+        assert!(top <= grid.level, "subtree root level {top} is below the leaves ({})", grid.level);
+        Self { top: top as usize, ..Self::new(grid) }
     }
 
     /// Adds a chunk of leaves; its codes must continue the strictly increasing order.
@@ -111,7 +122,7 @@ impl OctreeBuilder {
     /// Records the finished voxel `code` (at `level`, stored at `index`) in its parent, closing
     /// the parent's predecessor first if the stream has left it.
     fn add_to_parent(&mut self, level: usize, code: u64, index: u32, attr: VoxelAttr) {
-        if level == 0 {
+        if level == self.top {
             return;
         }
         let parent = code >> 3;
@@ -152,7 +163,7 @@ impl OctreeBuilder {
     }
 
     pub fn finish(mut self) -> Octree {
-        for level in (0..self.grid.level as usize).rev() {
+        for level in (self.top..self.grid.level as usize).rev() {
             self.close(level);
         }
         Octree { grid: self.grid, levels: self.levels }
