@@ -181,9 +181,16 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                 // dragon): fitted to its peaks at L = 15 and 16 (1.39 GB, 3.36 GB; estimates 1.06×
                 // and 1.0×) with the exponent rounded up to 0.6, which leaves L = 10 at 1.9×.
                 "svdag" => 16.0 * 1_048_576.0 + 32.0 * n + 3300.0 * voxels.powf(0.6),
-                // (bytes per triangle, bytes per estimated surface voxel): least-squares fits to
-                // measured peaks (dragon, bunny, city, grass, menger at L = 8 and 10), × 1.5.
-                "esvo" => 256.0 * n + 80.0 * voxels,
+                // The sub-cube build holds the finished words, one batch of sub-cubes (octrees,
+                // contours: about 500 MiB at most) and the triangles' setup, never the whole
+                // octree: the words are ~9.5 B per leaf voxel (compressed attributes; raw ones
+                // ~17 B), and the surface estimate runs ~2× the dragon's leaves. Fitted to the
+                // dragon's peaks at L = 11…14 (see the esvo-scale preset's report).
+                "esvo" => {
+                    let raw = input.params.get("esvo.attributes", String::new()).is_ok_and(|a| a == "raw");
+                    let per_voxel = if raw { 12.0 } else { 8.0 };
+                    256.0 * n + per_voxel * voxels + 512.0 * 1_048_576.0
+                }
                 _ => 16.0 * n + 64.0 * voxels,
             }
         }

@@ -83,6 +83,12 @@ pub enum Preset {
     /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;
     /// with the paper's figures and growth per doubling. Long: 60 cases, about 10 minutes on 2 cores.
     SvdagTables,
+    /// ESVO at scale (issue 18) on the dragon beside the reference BVH at 1024×1024: L = 10…14
+    /// (2^14 = 16384³ voxels), blocks, bytes per voxel, build peak and time (each build timed
+    /// once: the L = 14 build alone takes minutes), Mrays/s; and L = 14 with LOD at one pixel
+    /// (`esvo.lod_pixels=1`) against L = 11 without; L = 11 forced into ~100 blocks beside its one
+    /// block. Long: about 20 minutes and 8 GB on 2 cores.
+    EsvoScale,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -247,6 +253,9 @@ pub struct Plan {
     pub threads: usize,
     pub warmup: u32,
     pub reps: u32,
+    /// Build repetitions: `warmup` and `reps` unless the preset times its builds fewer times.
+    pub build_warmup: u32,
+    pub build_reps: u32,
     /// Structure parameters: the preset's, then the user's (later entries win).
     pub params: Vec<String>,
     /// Voxel levels to sweep (`--levels`); empty: the one `voxel.levels` of `params`.
@@ -272,6 +281,7 @@ impl Preset {
             Preset::OrgTable1 => "org-table1",
             Preset::OrgFast => "org-fast",
             Preset::SvdagTables => "svdag-tables",
+            Preset::EsvoScale => "esvo-scale",
         }
     }
 
@@ -291,6 +301,15 @@ impl Preset {
             (Preset::OrgFast, "org") => {
                 vec![(Vec::new(), None), (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into()))]
             }
+            // Every level to 2^14, L = 14 with LOD at a pixel, and L = 11 split into ~100 blocks
+            // (what the split costs a ray, beside the same level in one block).
+            (Preset::EsvoScale, "esvo") => (10..=14)
+                .map(|l| at(l, &[], None))
+                .chain([
+                    at(11, &["esvo.block_words=262144"], Some("blocks")),
+                    at(14, &["esvo.lod_pixels=1"], Some("lod1")),
+                ])
+                .collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -311,6 +330,7 @@ impl Preset {
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
             Preset::OrgFast => vec!["bvh", "embree", "org"],
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
+            Preset::EsvoScale => vec!["bvh", "esvo"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -327,7 +347,7 @@ impl Preset {
             Preset::Default => &["voxel.levels=9"],
             // Table 3 times the SVO → SVDAG conversion alone: build the octree first.
             Preset::SvdagTables => &["svdag.build=octree"],
-            Preset::OrgFast => &[],
+            Preset::OrgFast | Preset::EsvoScale => &[],
         }
     }
 
@@ -344,6 +364,7 @@ impl Preset {
             Preset::OrgFig2 => vec!["dragon-11k", "dragon-48k", "dragon-203k", "dragon", "dragon@sub1"],
             Preset::SvdagTables => vec!["bunny", "dragon", "menger", "city", "mandelbulb"],
             Preset::OrgFast => vec!["bunny", "dragon-48k", "city", "terrain", "dragon"],
+            Preset::EsvoScale => vec!["dragon"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -365,7 +386,16 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
-            Preset::OrgFast => (1024, 1024),
+            Preset::OrgFast | Preset::EsvoScale => (1024, 1024),
+        }
+    }
+
+    /// Build repetitions (warm-up, timed) where they differ from the renders': builds that take
+    /// minutes are timed once (their samples say so in the results).
+    fn build_reps(self) -> Option<(u32, u32)> {
+        match self {
+            Preset::EsvoScale => Some((0, 1)),
+            _ => None,
         }
     }
 }
@@ -414,6 +444,8 @@ impl RunArgs {
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
+            build_warmup: self.warmup.or(preset.build_reps().map(|b| b.0)).unwrap_or(1),
+            build_reps: self.reps.or(preset.build_reps().map(|b| b.1)).unwrap_or(5),
             params: preset
                 .params()
                 .iter()

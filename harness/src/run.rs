@@ -465,12 +465,12 @@ fn timed_builds(
     let mut reference_samples = Vec::new();
     let mut peak = 0usize;
     let mut built: Option<Box<dyn Accel>> = None;
-    for i in 0..plan.warmup + plan.reps {
+    for i in 0..plan.build_warmup + plan.build_reps {
         drop(built.take());
         if let Some(reference) = reference {
             let t = Instant::now();
             drop((reference.build)(input)?);
-            if i >= plan.warmup {
+            if i >= plan.build_warmup {
                 reference_samples.push(ms_since(t));
             }
         }
@@ -479,7 +479,7 @@ fn timed_builds(
         let s = (entry.build)(input)?;
         let ms = ms_since(t);
         peak = peak.max(alloc::peak_bytes().saturating_sub(base));
-        if i >= plan.warmup {
+        if i >= plan.build_warmup {
             samples.push(ms);
         }
         built = Some(s);

@@ -288,7 +288,7 @@ fn si(v: f64) -> String {
 }
 
 /// 2048 → "2 KiB", to three significant digits.
-fn bytes(v: f64) -> String {
+pub(crate) fn bytes(v: f64) -> String {
     let (scaled, unit) = match v {
         v if v >= (1u64 << 30) as f64 => (v / (1u64 << 30) as f64, "GiB"),
         v if v >= (1u64 << 20) as f64 => (v / (1u64 << 20) as f64, "MiB"),

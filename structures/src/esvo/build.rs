@@ -151,7 +151,7 @@ impl Streamer {
         let (grid, s) = (self.grid, self.s);
         let t = Instant::now();
         let fitter = self.fitter.as_ref();
-        let converted: Vec<(u64, Octree, Vec<Vec<u32>>)> = std::mem::take(&mut self.batch)
+        let (converted, trees): (Vec<(u64, Vec<Vec<u32>>)>, Vec<Octree>) = std::mem::take(&mut self.batch)
             .into_par_iter()
             .map(|sub| {
                 let mut builder = OctreeBuilder::subtree(grid, s as u32);
@@ -166,14 +166,15 @@ impl Streamer {
                     }
                     None => Vec::new(),
                 };
-                (sub.code, tree, contours)
+                ((sub.code, contours), tree)
             })
-            .collect();
+            .unzip();
         self.batch_voxels = 0;
         self.contour_ms += ms_since(t);
         let t = Instant::now();
         let leaf = grid.level as usize;
-        for (code, tree, contours) in converted {
+        for (id, (code, contours)) in converted.into_iter().enumerate() {
+            let tree = &trees[id];
             self.leaf_voxels += tree.voxel_count();
             self.interior_voxels += tree.levels[s + 1..leaf].iter().map(|l| l.len() as u64).sum::<u64>();
             self.contours_fitted += contours.iter().skip(s + 1).flatten().filter(|&&w| w != 0).count() as u64;
@@ -188,12 +189,13 @@ impl Streamer {
                 self.trunk.child_contours.push(contours.get(s + 1).map_or(0, |c| c[first + k]));
             }
             if s + 1 < leaf {
-                let emitter = Emitter::new(&tree, &contours, &[], s);
+                let emitter = Emitter::new(&trees, id, &contours, &[], s);
                 let group = emitter.emit_group(&mut self.writer, s, 0)?;
-                self.writer.settle(&tree);
                 self.trunk.groups.push(group);
             }
         }
+        // The compressed blocks of the batch's descriptors, in one parallel pass.
+        self.writer.settle(&trees);
         self.layout_ms += ms_since(t);
         Ok(())
     }
@@ -220,9 +222,10 @@ impl Streamer {
             } else {
                 contours.clear();
             }
-            let emitter = Emitter::new(&tree, &contours, &self.trunk.groups, 0);
+            let trees = [tree];
+            let emitter = Emitter::new(&trees, 0, &contours, &self.trunk.groups, 0);
             root_slot = emitter.emit_root(&mut self.writer)?;
-            self.writer.settle(&tree);
+            self.writer.settle(&trees);
         }
         self.layout_ms += ms_since(t);
         let occupied = match grid.level {
@@ -620,7 +623,13 @@ impl Below {
 #[derive(Clone, Copy, PartialEq)]
 enum Slot {
     Header,
-    Descriptor { level: u8, voxel: u32 },
+    /// Voxel `voxel` at `level` of the emission's `tree` (an index into the trees the writer
+    /// is settled with).
+    Descriptor {
+        tree: u32,
+        level: u8,
+        voxel: u32,
+    },
     Far,
     Pad,
 }
@@ -723,15 +732,15 @@ impl BlockWriter {
 
     /// Closes the open block (computing the compressed blocks it still owes from `tree`) and opens
     /// an empty one.
-    fn next_block(&mut self, tree: &Octree) -> Result<(), BuildError> {
-        self.settle(tree);
+    fn next_block(&mut self, trees: &[Octree]) -> Result<(), BuildError> {
+        self.settle(trees);
         self.close()
     }
 
     /// The compressed blocks of the open block's slot pairs written so far, read from `tree`
     /// (whose voxels its descriptors since the last settle name). A pair never straddles two
     /// emissions: every group starts at an even slot.
-    fn settle(&mut self, tree: &Octree) {
+    fn settle(&mut self, trees: &[Octree]) {
         if self.attributes != Attributes::Compressed {
             return;
         }
@@ -746,7 +755,10 @@ impl BlockWriter {
             .map(|j| {
                 let mut values = [None; 16];
                 for half in 0..2 {
-                    let Some(Slot::Descriptor { level, voxel }) = kinds.get(2 * j + half).copied() else { continue };
+                    let Some(Slot::Descriptor { tree, level, voxel }) = kinds.get(2 * j + half).copied() else {
+                        continue;
+                    };
+                    let tree = &trees[tree as usize];
                     let node = &tree.levels[level as usize];
                     let mask = node.masks[voxel as usize] as u32;
                     let first = node.first_child[voxel as usize] as usize;
@@ -774,11 +786,19 @@ impl BlockWriter {
         // The block's descriptors start on a page (its page headers find its info section).
         let start = b.base as usize * 2;
         let stats = &mut self.stats;
+        let need = start - self.out.len()
+            + 2 * n
+            + INFO_WORDS
+            + b.contours.len()
+            + b.lookups.len().max(n)
+            + b.compressed.len() * COMPRESSED_BLOCK_WORDS
+            + b.values.len();
+        // Grown by a quarter at a time, not doubled: the words are most of the build's peak.
+        if self.out.capacity() - self.out.len() < need {
+            self.out.reserve_exact(need.max(self.out.len() / 4));
+        }
         stats.block_padding_bytes += ((start - self.out.len()) * 4) as u64;
         self.out.resize(start, 0);
-        self.out.reserve(
-            2 * n + INFO_WORDS + b.contours.len() + b.lookups.len().max(b.compressed.len() * 6) + b.values.len(),
-        );
         for (s, (slot, kind)) in b.slots.iter().zip(&b.kinds).enumerate() {
             // Words from this slot to the info section, which follows the last slot.
             let to_info = 2 * (n - s);
@@ -858,6 +878,9 @@ impl BlockWriter {
 /// down) or the trunk's (from the root's descriptor; its deepest descriptors' groups are the
 /// sub-cubes', given as `externals`).
 struct Emitter<'a> {
+    /// The trees emitted since the writer last settled; this emission's is `trees[id]`.
+    trees: &'a [Octree],
+    id: u32,
     tree: &'a Octree,
     contours: &'a [Vec<u32>],
     /// Global group slots of the voxels at `tree`'s deepest descriptor level, when their
@@ -872,10 +895,11 @@ struct Emitter<'a> {
 
 impl<'a> Emitter<'a> {
     /// `top`: the level of `tree`'s root.
-    fn new(tree: &'a Octree, contours: &'a [Vec<u32>], externals: &'a [u64], top: usize) -> Self {
+    fn new(trees: &'a [Octree], id: usize, contours: &'a [Vec<u32>], externals: &'a [u64], top: usize) -> Self {
+        let tree = &trees[id];
         let leaves = tree.grid.level as usize;
         let depth = tree.levels.len() - 1;
-        let mut e = Self { tree, contours, externals, leaves, below: vec![Vec::new(); depth] };
+        let mut e = Self { trees, id: id as u32, tree, contours, externals, leaves, below: vec![Vec::new(); depth] };
         // Bottom-up over the voxels with groups (children not leaves).
         for l in (top..depth.min(leaves - 1)).rev() {
             if e.is_external(l) {
@@ -939,7 +963,7 @@ impl<'a> Emitter<'a> {
         whole.slots += 2;
         whole.add(self.child_below(0, 0));
         if !w.open.fits(whole, w.cap) && !w.open.is_empty() {
-            w.next_block(self.tree)?;
+            w.next_block(self.trees)?;
         }
         let external = self.is_external(0);
         if !self.has_group(0) || (!external && w.open.fits(whole, w.cap)) {
@@ -963,7 +987,7 @@ impl<'a> Emitter<'a> {
     fn emit_group(&self, w: &mut BlockWriter, level: usize, i: usize) -> Result<u64, BuildError> {
         let below = self.below[level][i];
         if !w.open.fits(below, w.cap) && !w.open.is_empty() && OpenBlock::new(0).fits(below, w.cap) {
-            w.next_block(self.tree)?;
+            w.next_block(self.trees)?;
         }
         if w.open.fits(below, w.cap) {
             return self.inline_group(w, level, i);
@@ -974,7 +998,7 @@ impl<'a> Emitter<'a> {
         let mut group_cost = Below { slots: 2 * m as u64 + 1, ..Below::default() };
         (first..first + m).for_each(|c| group_cost.add(self.descriptor_cost(level + 1, c)));
         if !w.open.fits(group_cost, w.cap) {
-            w.next_block(self.tree)?;
+            w.next_block(self.trees)?;
         }
         let far_count = if self.has_group(level + 1) { m } else { 0 };
         let group = w.alloc(m + far_count);
@@ -1030,7 +1054,7 @@ impl<'a> Emitter<'a> {
         let mask = node.masks[i] as u32;
         let first = node.first_child[i] as usize;
         let s = w.local(slot).expect("a descriptor is written while its block is open");
-        w.open.kinds[s] = Slot::Descriptor { level: level as u8, voxel: i as u32 };
+        w.open.kinds[s] = Slot::Descriptor { tree: self.id, level: level as u8, voxel: i as u32 };
         w.stats.descriptors += 1;
         // Second word: the children's contours, consecutive (block-local index until the block
         // closes and the pointer becomes relative to the descriptor).
