@@ -427,7 +427,8 @@ fn measure_case(
                 let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
                 // No step heat map where the kernel does not count steps (a library's traversal).
                 let heat = if stats.counts_steps() { heat.as_slice() } else { &[] };
-                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, heat)?);
+                let post = |rgb: &[u8]| accel.post_filter(&camera, &frame, rgb);
+                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, heat, post)?);
             }
             if workload == Workload::Primary {
                 if structure == REFERENCE && ctx.reference_frame.is_none() {

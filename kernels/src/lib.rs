@@ -80,6 +80,12 @@ pub trait Traverse: Send + Sync {
     fn gpu_program(&self, _camera: &Camera) -> Option<gpu::GpuProgram<'_>> {
         None
     }
+    /// The image post-process of the structure's paper, where it has one and it is switched on
+    /// (ESVO's adaptive blur, seed 000 §6.3, `esvo.post_filter`): `rgb` (8-bit, row-major), the
+    /// shaded image of `frame`, filtered. For images only: never part of timed work.
+    fn post_filter(&self, _camera: &Camera, _frame: &cpu::render::Frame, _rgb: &[u8]) -> Option<Vec<u8>> {
+        None
+    }
     /// Which of [`Counters`]' per-ray counts the counting path really counts. A library's own
     /// traversal (obvhs, Embree) exposes no steps or node visits; the report shows a dash there
     /// rather than a zero.

@@ -136,7 +136,8 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "voxel",
         summary: "Laine & Karras ESVO: child descriptors, far pointers, page headers, contours, attachments; \
                   --levels L --contours on|off --attributes raw|compressed --beam on|off; \
-                  esvo.lod_pixels=P stops primary rays at voxels under P pixels",
+                  esvo.lod_pixels=P stops primary rays at voxels under P pixels; \
+                  esvo.post_filter=on writes the paper's adaptive blur of each image beside it",
         params: &[
             "voxel.levels",
             "esvo.attributes",
@@ -147,6 +148,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
             "esvo.contour_inherited",
             "esvo.contour_max_ratio",
             "esvo.lod_pixels",
+            "esvo.post_filter",
         ],
         check: |p| structures::esvo::EsvoParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::esvo::Esvo::build(input)?)),

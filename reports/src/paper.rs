@@ -491,6 +491,91 @@ fn table1(results: &Results) -> String {
 mod tests {
     use super::*;
 
+    use crate::schema::{BuildStats, MemoryStats, RenderStats, Settings, Timing};
+
+    /// An ESVO case at `level` with `blocks` blocks, `bytes`, a build `peak`, `steps` per ray and
+    /// a render at `rate`× its paired bvh; `stored` of `fitted` contours.
+    #[allow(clippy::too_many_arguments)]
+    fn esvo(
+        level: u32,
+        variant: Option<&str>,
+        lod: f64,
+        blocks: u64,
+        bytes: u64,
+        peak: u64,
+        steps: f64,
+        rate: f64,
+    ) -> Case {
+        let timing = |ms: f64| Timing { ms_median: ms, reps: 1, ..Timing::default() };
+        Case {
+            scene: "dragon".into(),
+            structure: "esvo".into(),
+            resolution: Some(1 << level),
+            variant: variant.map(String::from),
+            params: serde_json::json!({ "esvo": {
+                "params": { "lod_pixels": lod },
+                "stats": { "blocks": blocks, "largest_block_bytes": 1u64 << 26, "contours": 900, "contours_fitted": 900,
+                           "leaf_voxels": bytes / 10, "voxels": bytes / 7 },
+            }}),
+            memory: MemoryStats { bytes, ..MemoryStats::default() },
+            build: BuildStats {
+                timing: timing(1000.0),
+                peak_bytes: peak,
+                reference_timing: Some(timing(700.0)),
+                ..BuildStats::default()
+            },
+            render: vec![RenderStats {
+                backend: "cpu".into(),
+                workload: "primary".into(),
+                rays: 1 << 20,
+                timing: timing(100.0),
+                reference_timing: Some(timing(100.0 * rate)),
+                mrays_per_s: (1 << 20) as f64 / 100.0 / 1e3,
+                steps_per_ray_mean: steps,
+                ..RenderStats::default()
+            }],
+            ..Case::default()
+        }
+    }
+
+    #[test]
+    fn esvo_scale_marks_contours_peak_lod_and_the_block_split() {
+        let mut cases: Vec<Case> = (10..=14)
+            .map(|l| {
+                esvo(
+                    l,
+                    None,
+                    0.0,
+                    1 << (2 * l.saturating_sub(11)),
+                    25_000_000 << (2 * (l - 10)),
+                    30_000_000 << (2 * (l - 10)),
+                    8.0,
+                    0.8,
+                )
+            })
+            .collect();
+        // L = 14's peak is over 3× its bytes; LOD saves steps; the split costs 10 %.
+        cases[4].build.peak_bytes = cases[4].memory.bytes * 4;
+        cases.push(esvo(14, Some("lod1"), 1.0, 256, 25_000_000 << 8, 1 << 30, 7.0, 0.9));
+        cases.push(esvo(11, Some("blocks"), 0.0, 100, 100_000_000, 1 << 30, 8.0, 0.72));
+        let results = Results {
+            settings: Settings { preset: "esvo-scale".into(), ..Settings::default() },
+            cases,
+            ..Results::default()
+        };
+        let text = section(&results);
+        assert!(text.contains("ESVO at scale"), "{text}");
+        assert!(text.contains("4.00×"), "growth per level: {text}");
+        assert!(text.contains("dragon L = 13: build peak ≤ 3× the structure's bytes (1.20×): **held**"), "{text}");
+        assert!(text.contains("dragon L = 14: build peak ≤ 3× the structure's bytes (4.00×): **not held**"), "{text}");
+        assert!(text.contains("7.00 vs 8.00: **held**"), "LOD against L = 11: {text}");
+        assert!(
+            text.contains("in 100 blocks renders at 0.72× bvh, in one block at 0.80× bvh: the split costs +10.0 %"),
+            "{text}"
+        );
+        assert!(text.contains("(conference 14→15)"), "{text}");
+    }
+
     #[test]
     fn exponents_of_power_laws() {
         let linear: Vec<(f64, f64)> = [1e3, 1e4, 1e5].iter().map(|&n| (n, 3.0 * n)).collect();

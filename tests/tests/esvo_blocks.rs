@@ -1,15 +1,17 @@
 //! ESVO's blocks and level of detail (issue 18).
 //!
 //! - A build forced into many small blocks (`esvo.block_words`) stores exactly what the default
-//!   build stores in one block: every voxel the descriptors reach, walked here from the words
-//!   alone (page header → info section → contour data and attachment, as seed 000 Fig. 8 reads
-//!   them), has the same contour and the same attributes, and every fitted contour is stored.
+//!   build stores in one block: every voxel the descriptors reach, read back from the words alone
+//!   (`structures::esvo::read`: page header → info section → contour data and attachment, as
+//!   seed 000 Fig. 8 reads them), has the same contour and the same attributes, and every fitted
+//!   contour is stored.
 //! - Raw attributes equal the voxelisation's own (leaves) and the canonical octree's means
 //!   (interior voxels), encoded.
 //! - The caster returns the same hits through both layouts, bit for bit, on the shared ray set
 //!   (aimed, random, axis-parallel, through vertices, along edges) and on a primary render.
 //! - `esvo.lod_pixels` stops primary rays early (fewer steps) and only at voxels no larger than
-//!   the pixel footprint it asks for.
+//!   the pixel footprint it asks for, and larger than half of it (their parents did not stop);
+//! - the §6.3 post-process blur leaves sub-pixel voxels alone and never crosses a silhouette.
 
 use std::collections::BTreeMap;
 
@@ -17,7 +19,8 @@ use kernels::Traverse;
 use kernels::cpu::render::{ShadeContext, Workload, render, render_counted};
 use scenes::{Camera, Scene};
 use structures::esvo::Esvo;
-use structures::esvo::attributes::{CompressedBlock, encode_abgr, encode_normal};
+use structures::esvo::attributes::{encode_abgr, encode_normal};
+use structures::esvo::read::{self, StoredAttr};
 use structures::voxel::{self, VoxelGrid, voxelize_all};
 use structures::{BuildInput, Params};
 use tests::ray_set;
@@ -32,57 +35,12 @@ fn build(scene: &Scene, params: &[&str]) -> Esvo {
         .unwrap_or_else(|e| panic!("{params:?}: {e}"))
 }
 
-/// What the words say about one voxel: its contour word (0: none) and its attribute words (raw:
-/// ABGR and normal; compressed: the decoded colour and normal, as f32 bits).
-type Stored = (u32, [u32; 6]);
-
-fn popc_below(mask: u32, slot: u32) -> usize {
-    (mask & ((1 << slot) - 1)).count_ones() as usize
-}
-
-/// Every voxel below the root, by (level, Morton code), read from `e.words` alone.
-fn decode(e: &Esvo) -> BTreeMap<(u32, u64), Stored> {
-    let w = &e.words;
-    let raw = e.attributes == structures::esvo::Attributes::Raw;
+/// What the words say about one voxel: its contour word and its attributes, by (level, code).
+fn decode(e: &Esvo) -> BTreeMap<(u32, u64), (u32, StoredAttr)> {
     let mut out = BTreeMap::new();
-    let mut stack = vec![(e.root_slot as usize, 0u32, 0u64)];
-    while let Some((n, level, code)) = stack.pop() {
-        let (w0, w1) = (w[2 * n], w[2 * n + 1]);
-        let (valid, leaf) = ((w0 >> 8) & 0xff, w0 & 0xff);
-        let mut offset = w0 >> 17;
-        if w0 >> 16 & 1 == 1 {
-            offset = w[2 * (n + offset as usize)];
-        }
-        let children = (n as u32).wrapping_add(offset) as usize;
-        // Fig. 8: the page header leads to the block's info section.
-        let page = (n & !1023) * 2;
-        let info = page + w[page] as usize;
-        let block = (info as i64 + w[info] as i32 as i64) as usize;
-        assert!(block <= 2 * n && 2 * n < info, "slot {n} lies in the block its page header names");
-        let index = n - block / 2;
-        let attach = info + w[info + 4] as usize;
-        for slot in (0..8).filter(|s| valid >> s & 1 == 1) {
-            let contour =
-                if w1 >> slot & 1 == 1 { w[2 * n + (w1 >> 8) as usize + popc_below(w1 & 0xff, slot)] } else { 0 };
-            let attr = if raw {
-                let entry = w[attach + index];
-                assert_eq!(entry & 0xff, valid, "the lookup entry's mask is the valid mask");
-                let value = attach + (info - block) / 2 + 2 * ((entry >> 8) as usize + popc_below(entry & 0xff, slot));
-                [w[value], w[value + 1], 0, 0, 0, 0]
-            } else {
-                let b = attach + index / 2 * 6;
-                let block = CompressedBlock(w[b..b + 6].try_into().expect("six words"));
-                let k = (index & 1) * 8 + slot as usize;
-                let (c, nrm) = (block.color(k), block.normal(k));
-                [c.x, c.y, c.z, nrm.x, nrm.y, nrm.z].map(f32::to_bits)
-            };
-            let child = (code << 3) | slot as u64;
-            assert!(out.insert((level + 1, child), (contour, attr)).is_none(), "voxel reached twice");
-            if leaf >> slot & 1 == 0 {
-                stack.push((children + popc_below(valid & !leaf, slot), level + 1, child));
-            }
-        }
-    }
+    read::for_each_voxel(e, |v| {
+        assert!(out.insert((v.level, v.code), (v.contour, v.attr)).is_none(), "voxel reached twice")
+    });
     out
 }
 
@@ -132,7 +90,11 @@ fn raw_attributes_are_the_voxelisations_own_through_many_blocks() {
     }
     assert!(e.stats.blocks >= 20);
     assert_eq!(expected.len(), stored.len());
-    let wrong = expected.iter().filter(|(k, v)| stored.get(k).map(|s| [s.1[0], s.1[1]]) != Some(**v)).count();
+    let raw = |a: &StoredAttr| match *a {
+        StoredAttr::Raw { abgr, normal } => Some([abgr, normal]),
+        StoredAttr::Compressed { .. } => None,
+    };
+    let wrong = expected.iter().filter(|(k, v)| stored.get(k).and_then(|s| raw(&s.1)) != Some(**v)).count();
     assert_eq!(wrong, 0, "{wrong} of {} voxels' raw attributes differ from the voxelisation's", expected.len());
 }
 
@@ -202,6 +164,60 @@ fn lod_stops_primary_rays_at_voxels_as_small_as_the_pixel() {
             hits > (size * size / 10) as usize && coarser > hits / 20,
             "{pixels} px: {coarser} of {hits} hits nearer"
         );
+        // The hit id says how far above the leaves each stop is: that voxel is at most the asked
+        // pixels wide where the ray leaves it, and its parent (which did not stop the ray) more.
+        let (mut above_leaves, mut checked) = (0, 0);
+        for (_, _, s) in l.pixels().filter(|(_, _, s)| s.is_hit()) {
+            let above = voxel::morton::levels_above(s.prim);
+            let level = 10 - above as i32;
+            assert!(level >= 1, "a stop at level {level}");
+            let px = leaf * (1u64 << above) as f32 / (s.t * camera.pixel_angle());
+            assert!(px <= 1.01 * pixels, "{pixels} px: a stop {px:.2} px wide (level {level})");
+            if above > 0 && level >= 2 {
+                assert!(px > 0.5 * pixels, "{pixels} px: its parent ({:.2} px) would have stopped the ray", 2.0 * px);
+                checked += 1;
+            }
+            above_leaves += usize::from(above > 0);
+        }
+        assert!(above_leaves > hits / 2 && checked > 0, "{pixels} px: {above_leaves} of {hits} stops above the leaves");
+    }
+    // Without LOD every hit is a leaf: its id is its plain code.
+    assert!(f.pixels().all(|(_, _, s)| !s.is_hit() || voxel::morton::levels_above(s.prim) == 0));
+}
+
+/// Seed 000 §6.3's blur: nothing below a pixel moves, a flat colour stays flat, noise is smoothed,
+/// and nothing crosses into a miss (radius 0).
+#[test]
+fn post_filter_blurs_voxels_larger_than_a_pixel_and_never_across_a_miss() {
+    use kernels::cpu::esvo::post_filter;
+    let (w, h) = (64u32, 48u32);
+    let n = (w * h) as usize;
+    let noise: Vec<u8> = (0..n)
+        .flat_map(|p| {
+            let v = ((p as u32).wrapping_mul(2_654_435_761) >> 24) as u8;
+            [v, v, v]
+        })
+        .collect();
+    assert_eq!(post_filter(&noise, &vec![1.0; n], w, h), noise, "voxels of a pixel are left alone");
+    let flat = vec![77u8; 3 * n];
+    assert_eq!(post_filter(&flat, &vec![6.0; n], w, h), flat, "a flat colour stays flat");
+    let variance = |img: &[u8]| {
+        let m = img.iter().map(|&v| f64::from(v)).sum::<f64>() / img.len() as f64;
+        img.iter().map(|&v| (f64::from(v) - m).powi(2)).sum::<f64>() / img.len() as f64
+    };
+    let blurred = post_filter(&noise, &vec![6.0; n], w, h);
+    assert!(variance(&blurred) < 0.25 * variance(&noise), "{} vs {}", variance(&blurred), variance(&noise));
+    // Left: grey noise on voxels 8 px wide; right: red misses.
+    let mut img = noise.clone();
+    let mut radii = vec![8.0; n];
+    for p in (0..n).filter(|p| p % (w as usize) >= 40) {
+        img[3 * p..3 * p + 3].copy_from_slice(&[255, 0, 0]);
+        radii[p] = 0.0;
+    }
+    let out = post_filter(&img, &radii, w, h);
+    for p in (0..n).filter(|p| p % (w as usize) < 40) {
+        let c = &out[3 * p..3 * p + 3];
+        assert!(c[0] == c[1] && c[1] == c[2], "pixel {p}: {c:?} took red from across the miss");
     }
 }
 

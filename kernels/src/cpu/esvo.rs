@@ -139,7 +139,8 @@ pub fn attribute_normal(esvo: &Esvo, desc_slot: u32, slot: u32) -> Vec3 {
 /// most that small for its distance; a voxel above the leaves has its children's mean attributes.
 fn trace<S: Stats>(esvo: &Esvo, ray: &Ray, t_min: f32, t_max: f32, lod_k: f32, stats: &mut S) -> Option<Hit> {
     let h = cast_ray(esvo, ray, t_min, t_max, true, lod_k, stats)?;
-    Some(Hit { t: h.t, normal: attribute_normal(esvo, h.parent, h.slot), prim: morton::encode(h.coords) })
+    let prim = morton::hit_id(morton::encode(h.coords), esvo.grid.level - h.level);
+    Some(Hit { t: h.t, normal: attribute_normal(esvo, h.parent, h.slot), prim })
 }
 
 /// The LOD constant of `camera`'s primary rays: `esvo.lod_pixels` pixels per unit distance.
@@ -181,6 +182,95 @@ pub fn beam_starts<S: Stats>(esvo: &Esvo, camera: &Camera, stats: &mut S) -> Vec
     (0..w * h).map(|p| block_start[((p / w / b) * bw + (p % w) / b) as usize]).collect()
 }
 
+/// One sample of the post-process filter's kernel: its pixel offset, distance and weight.
+#[derive(Clone, Copy, Debug)]
+struct FilterSample {
+    dx: i32,
+    dy: i32,
+    dist: f32,
+    weight: f32,
+}
+
+/// Seed 000 §6.3's kernel (Fig. 18): 96 samples in a disc of 24 pixels, in increasing distance
+/// from the centre, their density falling with the square root of the distance (so about
+/// `R^1.5` of them lie within radius `R`), each weighted by the area of the ring it stands for.
+/// Sample `k` lies on the golden-angle spiral; its distance is that of its rounded offset.
+fn filter_kernel() -> Vec<FilterSample> {
+    const SAMPLES: usize = 96;
+    const RADIUS: f32 = 24.0;
+    let ring = |k: f32| RADIUS * (k / SAMPLES as f32).powf(2.0 / 3.0);
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    let mut kernel: Vec<FilterSample> = (0..SAMPLES)
+        .map(|k| {
+            let r = if k == 0 { 0.0 } else { ring(k as f32 + 0.5) };
+            let angle = k as f32 * golden;
+            let (dx, dy) = ((r * angle.cos()).round() as i32, (r * angle.sin()).round() as i32);
+            let weight = std::f32::consts::PI * (ring(k as f32 + 1.0).powi(2) - ring(k as f32).powi(2));
+            FilterSample { dx, dy, dist: ((dx * dx + dy * dy) as f32).sqrt(), weight }
+        })
+        .collect();
+    kernel.sort_by(|a, b| a.dist.total_cmp(&b.dist));
+    kernel
+}
+
+/// The adaptive blur of seed 000 §6.3 (Fig. 19) over the 8-bit RGB image `rgb` (row-major),
+/// where `radii[p]` is the size in pixels of the voxel pixel `p` hit (0 for a miss). A pixel whose
+/// voxel is at most a pixel stays as it is; otherwise the kernel's samples are accumulated in
+/// order of distance, the radius shrinking to the smallest of the samples' own radii, until the
+/// next sample lies beyond it; each weight fades to zero over the radius' last pixel. A miss (radius
+/// 0) therefore stops the blur at a silhouette, which contours already render sharply.
+pub fn post_filter(rgb: &[u8], radii: &[f32], width: u32, height: u32) -> Vec<u8> {
+    let kernel = filter_kernel();
+    let (w, h) = (width as i32, height as i32);
+    (0..w * h)
+        .into_par_iter()
+        .flat_map_iter(|p| {
+            let (x, y) = (p % w, p / w);
+            let at = |q: i32| [rgb[3 * q as usize], rgb[3 * q as usize + 1], rgb[3 * q as usize + 2]];
+            let mut r = radii[p as usize];
+            if r <= 1.0 {
+                return at(p);
+            }
+            let (mut accum, mut total) = ([0f32; 3], 0f32);
+            for s in &kernel {
+                let (sx, sy) = (x + s.dx, y + s.dy);
+                if !(0..w).contains(&sx) || !(0..h).contains(&sy) {
+                    continue;
+                }
+                let q = sy * w + sx;
+                r = r.min(radii[q as usize]);
+                if s.dist > r {
+                    break;
+                }
+                let weight = s.weight * (r - s.dist).min(1.0);
+                let c = at(q);
+                for (a, &v) in accum.iter_mut().zip(&c) {
+                    *a += f32::from(v) * weight;
+                }
+                total += weight;
+            }
+            if total > 0.0 { accum.map(|a| (a / total).round().clamp(0.0, 255.0) as u8) } else { at(p) }
+        })
+        .collect()
+}
+
+/// Per pixel of `frame` (row-major), the size in pixels of the voxel its ray hit: the leaf size,
+/// or the size of the level an LOD stop reports in its hit id, over the pixel's footprint at
+/// the hit distance; 0 for a miss.
+pub fn voxel_pixels(esvo: &Esvo, camera: &Camera, frame: &crate::cpu::render::Frame) -> Vec<f32> {
+    let (leaf, angle) = (esvo.grid.voxel_size(), camera.pixel_angle());
+    frame
+        .pixels()
+        .map(|(_, _, s)| {
+            if !s.is_hit() {
+                return 0.0;
+            }
+            let size = leaf * (1u64 << morton::levels_above(s.prim).min(63)) as f32;
+            size / (s.t.max(f32::MIN_POSITIVE) * angle)
+        })
+        .collect()
+}
+
 impl Traverse for Esvo {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         trace(self, ray, t_min, t_max, 0.0, &mut NoStats)
@@ -216,5 +306,9 @@ impl Traverse for Esvo {
 
     fn gpu_program(&self, camera: &Camera) -> Option<GpuProgram<'_>> {
         Some(crate::gpu::voxel::esvo(self, camera))
+    }
+
+    fn post_filter(&self, camera: &Camera, frame: &crate::cpu::render::Frame, rgb: &[u8]) -> Option<Vec<u8>> {
+        self.params.post_filter.then(|| post_filter(rgb, &voxel_pixels(self, camera, frame), frame.width, frame.height))
     }
 }

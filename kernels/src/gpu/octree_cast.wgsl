@@ -192,11 +192,14 @@ fn octree_cast(o: vec3<f32>, d: vec3<f32>, t_min_in: f32, t_max_in: f32, contour
     return miss;
 }
 
-// A cast's hit as the primitive every voxel kernel reports: t and the hit cube's Morton code.
+// A cast's hit as the primitive every voxel kernel reports: t and the hit cube's Morton code,
+// with how many levels above the leaves it lies (an LOD stop) in bits 58–63 (bits 26–31 of the
+// high word; structures::voxel::morton::hit_id).
 fn voxel_trace_result(h: CastHit) -> TraceResult {
     if (!h.hit) {
         return no_hit();
     }
     let code = cube_morton(h.pos, h.scale, h.mirror);
-    return TraceResult(true, h.t, code.x, code.y);
+    let above = h.scale - (S_MAX - params(4u));
+    return TraceResult(true, h.t, code.x, code.y | (above << 26u));
 }

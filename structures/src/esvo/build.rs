@@ -151,9 +151,11 @@ impl Streamer {
         let (grid, s) = (self.grid, self.s);
         let t = Instant::now();
         let fitter = self.fitter.as_ref();
-        let (converted, trees): (Vec<(u64, Vec<Vec<u32>>)>, Vec<Octree>) = std::mem::take(&mut self.batch)
+        type Converted = (u64, Vec<Vec<u32>>);
+        let (converted, trees): (Vec<Converted>, Vec<Octree>) = std::mem::take(&mut self.batch)
             .into_par_iter()
             .map(|sub| {
+                // The sub-cube's code and contours, and its octree.
                 let mut builder = OctreeBuilder::subtree(grid, s as u32);
                 builder.push_chunk(&sub.chunk);
                 drop(sub.chunk);

@@ -1,18 +1,23 @@
-//! ESVO's memory layout (seed 000 §5, Figs. 1–3, 7–9): one `u32` array holding, in order,
+//! ESVO's memory layout (seed 000 §5, Figs. 1–3, 7–9): one `u32` array of **blocks** (§5.1). A
+//! block is a subtree's worth of the octree, laid out as
 //!
-//! 1. the **child descriptor array**, in 8-byte slots: a 64-bit descriptor per non-leaf voxel
-//!    (Fig. 2), 32-bit far pointers (one slot each), and a 32-bit **page header** in the slot at
-//!    every 8 KiB boundary, pointing to the block's info section — clearing the low 13 bits of any
-//!    descriptor address finds it (§5.1);
+//! 1. the **child descriptor array**, starting on a page, in 8-byte slots: a 64-bit descriptor per
+//!    non-leaf voxel (Fig. 2), 32-bit far pointers (one slot each), and a 32-bit **page header**
+//!    in the slot at every 8 KiB boundary, pointing to the block's info section — clearing the low
+//!    13 bits of any descriptor address finds it (§5.1);
 //! 2. the block's **info section**: a relative pointer back to the descriptors, the contour data
 //!    pointer, and the attachment directory (type id + relative pointer per attachment);
 //! 3. the **contour data**: 32-bit contours (§5.2, `super::contour`);
 //! 4. the **attachments** (§5.4–5.5): raw (a lookup entry per descriptor slot + 64-bit
 //!    colour/normal values) or compressed (a 6-word block per two sibling descriptor slots).
 //!
-//! All pointers are relative, as in the paper. This build emits a single block (the whole tree);
-//! the paper's splitting of the tree into several blocks for streaming (§7) is not implemented:
-//! it changes where info sections sit, not how a voxel is reached.
+//! Every pointer is relative, as in the paper: child pointers (15 bits) and far pointers (signed
+//! 32 bits, which may lead into another block) count slots from the descriptor; contour pointers
+//! (24 bits) count words from the descriptor to its first contour in its block's contour data,
+//! as the reference caster reads them; value pointers (24 bits) count values from the start of
+//! the block's value array. A block therefore holds at most 2^24 words of descriptors and
+//! contours and 2^24 raw values; the builder (`super::build`) starts a new block before either
+//! would overflow, and fails with the limit's name if a prediction were ever wrong.
 
 /// Bytes per page; a page header sits at the start of each (§5.1).
 pub const PAGE_BYTES: usize = 8192;
@@ -37,7 +42,8 @@ pub const LEAF_SHIFT: u32 = 0;
 pub const CONTOUR_PTR_SHIFT: u32 = 8;
 pub const CONTOUR_PTR_MAX: u32 = (1 << 24) - 1;
 
-// Raw attribute lookup entry (Fig. 7c): | value pointer (24) | attribute mask (8) |
+// Raw attribute lookup entry (Fig. 7c): | value pointer (24) | attribute mask (8) |; the pointer
+// counts 64-bit values from the start of the block's values.
 pub const VALUE_PTR_SHIFT: u32 = 8;
 pub const VALUE_PTR_MAX: u32 = (1 << 24) - 1;
 

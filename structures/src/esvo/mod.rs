@@ -2,11 +2,12 @@
 //!
 //! | file | what |
 //! |---|---|
-//! | [`layout`] | the bit layout: child descriptors, far pointers, page headers, info section |
-//! | [`build`] | octree → layout: contours, depth-first emission, attachments |
+//! | [`layout`] | the bit layout: blocks, child descriptors, far pointers, page headers, info sections |
+//! | [`build`] | voxeliser stream → blocks, sub-cube by sub-cube: contours, depth-first emission, attachments |
 //! | [`contour`] | 32-bit contours: fitting, encoding, the slab a kernel intersects |
 //! | [`attributes`] | raw and compressed colour/normal encodings |
 //! | [`compress`] | fitting a compressed block's colour endpoints and normal grid |
+//! | [`read`] | reading a build back from its words alone (tests, checks) |
 //!
 //! CPU ray caster (Fig. 15, beam optimisation §6.2): `kernels::cpu::esvo`.
 
@@ -15,6 +16,7 @@ pub mod build;
 pub mod compress;
 pub mod contour;
 pub mod layout;
+pub mod read;
 
 use glam::Vec3;
 use serde::Serialize;
@@ -52,6 +54,9 @@ pub struct EsvoParams {
     /// LOD for primary rays: stop at voxels whose projection is at most this many pixels
     /// (0 = off, traverse to the leaves; seed 000 §6).
     pub lod_pixels: f32,
+    /// Write the paper's adaptive post-process blur (§6.3) of each image beside it (images only,
+    /// never timed work).
+    pub post_filter: bool,
     /// The most words of descriptors and contours a block may hold (its contour pointers' reach,
     /// 2^24 − 1, by default; smaller values force many blocks, for tests).
     pub block_words: u32,
@@ -68,6 +73,7 @@ impl Default for EsvoParams {
             beam: false,
             beam_block: 8,
             lod_pixels: 0.0,
+            post_filter: false,
             block_words: layout::CONTOUR_PTR_MAX,
         }
     }
@@ -127,6 +133,7 @@ impl EsvoParams {
             beam: on_off(params, "esvo.beam", d.beam)?,
             beam_block,
             lod_pixels,
+            post_filter: on_off(params, "esvo.post_filter", d.post_filter)?,
             block_words,
         })
     }

@@ -24,6 +24,24 @@ pub fn compact(x: u64) -> u32 {
     x as u32
 }
 
+/// Where a voxel hit's primitive id records how many levels above the leaves the hit voxel is (an
+/// LOD stop): bits 58–63. Codes use at most 48 bits (levels ≤ 16), and a leaf hit leaves these
+/// bits 0, so its id is its plain code.
+pub const LEVELS_ABOVE_SHIFT: u32 = 58;
+
+/// The primitive id of a hit on the voxel `code` that lies `levels_above` levels above the leaves.
+#[inline]
+pub fn hit_id(code: u64, levels_above: u32) -> u64 {
+    debug_assert!(code >> LEVELS_ABOVE_SHIFT == 0 && levels_above < 64);
+    code | (levels_above as u64) << LEVELS_ABOVE_SHIFT
+}
+
+/// How many levels above the leaves the voxel of hit id `id` lies (see [`hit_id`]).
+#[inline]
+pub fn levels_above(id: u64) -> u32 {
+    (id >> LEVELS_ABOVE_SHIFT) as u32
+}
+
 /// The Morton code of integer voxel coordinates (each < 2^21).
 #[inline]
 pub fn encode(c: [u32; 3]) -> u64 {
