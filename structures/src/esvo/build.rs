@@ -10,7 +10,8 @@
 //!    are ever held;
 //! 3. the **trunk** — the levels from the root down to the `B`s, whose descriptors point at the
 //!    sub-cubes' groups through far pointers — is emitted last, from the `B`s' masks, attributes
-//!    and their children's contours and attributes, kept as the stream passes.
+//!    and their children's contours and attributes, kept as the stream passes. (Up to L = 7 the
+//!    one sub-cube is the whole tree, emitted from its root: there is no trunk.)
 //!
 //! Blocks (§5.1): a block is a page-aligned run of descriptors followed by its info section,
 //! contour data and attachment; every pointer inside it is relative. A block holds at most what
@@ -78,6 +79,8 @@ struct Streamer {
     contours_fitted: u64,
     contour_ms: f64,
     layout_ms: f64,
+    /// The root's slot, when the one sub-cube was the whole tree (`s` = 0).
+    root_slot: Option<u64>,
 }
 
 /// A streamed sub-cube waiting for its batch: its voxels, `B`'s code at level `s`, and what its
@@ -122,6 +125,7 @@ impl Streamer {
             contours_fitted: 0,
             contour_ms: 0.0,
             layout_ms: 0.0,
+            root_slot: None,
         }
     }
 
@@ -183,6 +187,13 @@ impl Streamer {
             if leaf >= 2 {
                 tree.levels[leaf - 1].codes.iter().for_each(|&c| self.bounds.add(c));
             }
+            if s == 0 {
+                // One sub-cube is the whole tree (L ≤ 7): no trunk, the root leads its block.
+                let emitter = Emitter::new(&trees, id, &contours, &[], 0);
+                self.root_slot = Some(emitter.emit_root(&mut self.writer)?);
+                self.interior_voxels += 1;
+                continue;
+            }
             let b = &tree.levels[s];
             debug_assert_eq!(b.codes, [code]);
             let (mask, first) = (b.masks[0], b.first_child[0] as usize);
@@ -206,7 +217,7 @@ impl Streamer {
     fn finish(mut self, voxelize: voxel::VoxelizeStats) -> Result<Esvo, BuildError> {
         let t = Instant::now();
         let (grid, s) = (self.grid, self.s);
-        let mut root_slot = 0;
+        let mut root_slot = self.root_slot.unwrap_or(0);
         let mut trunk_interior = 0;
         if !self.trunk.children.is_empty() {
             // The trunk's octree: its deepest level holds the B's children (their attributes),
