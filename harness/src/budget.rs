@@ -31,9 +31,9 @@ pub const FRAME_BYTES_PER_PIXEL: u64 = 192;
 
 /// Work is refused when its estimate times this passes the allowance. Measured over the built-in
 /// scenes (and the voxel structures at L = 8 and 10), estimate/peak runs from 0.36 (the SVDAG's
-/// streamed build on grass at L = 8, whose sub-cubes repeat long triangles) and 0.73 (ESVO on
-/// grass at L = 10) up to 118 (RG-2's upper bound on grass); the fitted voxel models' typical
-/// error is under 2× either way.
+/// streamed build on grass at L = 8, whose sub-cubes repeat long triangles) up to 118 (RG-2's
+/// upper bound on grass); ESVO's sub-cube build runs 1.05–3.5 on the dragon to L = 14; the fitted
+/// voxel models' typical error is under 2× either way.
 pub const HEADROOM: f64 = 1.5;
 
 fn with_headroom(bytes: u64) -> u64 {
@@ -181,15 +181,18 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                 // dragon): fitted to its peaks at L = 15 and 16 (1.39 GB, 3.36 GB; estimates 1.06×
                 // and 1.0×) with the exponent rounded up to 0.6, which leaves L = 10 at 1.9×.
                 "svdag" => 16.0 * 1_048_576.0 + 32.0 * n + 3300.0 * voxels.powf(0.6),
-                // The sub-cube build holds the finished words, one batch of sub-cubes (octrees,
-                // contours: about 500 MiB at most) and the triangles' setup, never the whole
-                // octree: the words are ~9.5 B per leaf voxel (compressed attributes; raw ones
-                // ~17 B), and the surface estimate runs ~2× the dragon's leaves. Fitted to the
-                // dragon's peaks at L = 11…14 (see the esvo-scale preset's report).
+                // The sub-cube build holds the finished words, one batch of sub-cubes (4 M voxels:
+                // chunks, octrees, contours, ~100 B each) and the triangles' setup, never the
+                // whole octree: the words are 9.5–10.5 B per leaf voxel (compressed attributes; raw
+                // ones ~16 B), and the surface estimate runs ~2× the dragon's leaves. Fitted to
+                // the dragon's peaks at L = 10…14 (esvo-scale preset: estimate/peak 3.5 at L = 10
+                // falling to 1.05 at L = 14; raw at L = 13, 1.1) and every built-in scene at L = 8
+                // and 10 (1.2–12, the large ratios on builds of a few MiB).
                 "esvo" => {
                     let raw = input.params.get("esvo.attributes", String::new()).is_ok_and(|a| a == "raw");
-                    let per_voxel = if raw { 12.0 } else { 8.0 };
-                    256.0 * n + per_voxel * voxels + 512.0 * 1_048_576.0
+                    let per_voxel = if raw { 16.0 } else { 10.0 };
+                    let batch = 64.0 * voxels.min(8.0 * 1_048_576.0);
+                    256.0 * n + per_voxel * voxels + batch + 64.0 * 1_048_576.0
                 }
                 _ => 16.0 * n + 64.0 * voxels,
             }
