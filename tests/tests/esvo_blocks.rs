@@ -221,6 +221,26 @@ fn post_filter_blurs_voxels_larger_than_a_pixel_and_never_across_a_miss() {
     }
 }
 
+/// The shallowest trees (L = 1, 2: the whole tree is one sub-cube and its first levels are its
+/// leaves), with contours and both attachments: every voxel is reached and rays hit.
+#[test]
+fn shallowest_trees_build_and_cast() {
+    let scene = load("bunny");
+    for level in 1..=3 {
+        for attributes in ["raw", "compressed"] {
+            let e = build(&scene, &[&format!("voxel.levels={level}"), &format!("esvo.attributes={attributes}")]);
+            let voxels = decode(&e);
+            assert_eq!(voxels.len() as u64, e.stats.voxels - 1, "L={level} {attributes}");
+            assert_eq!(voxels.keys().filter(|(l, _)| *l == level).count() as u64, e.stats.leaf_voxels);
+            let hits = ray_set(&scene, &scene.triangles(), 600, 5)
+                .iter()
+                .filter(|r| e.intersect(&r.ray, 0.0, f32::INFINITY).is_some())
+                .count();
+            assert!(hits > 0, "L={level} {attributes}: no hits");
+        }
+    }
+}
+
 #[test]
 fn block_words_below_one_group_is_refused() {
     let params = Params::parse(["voxel.levels=5", "esvo.block_words=100"]).expect("parses");

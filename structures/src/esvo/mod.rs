@@ -3,7 +3,10 @@
 //! | file | what |
 //! |---|---|
 //! | [`layout`] | the bit layout: blocks, child descriptors, far pointers, page headers, info sections |
-//! | [`build`] | voxeliser stream → blocks, sub-cube by sub-cube: contours, depth-first emission, attachments |
+//! | [`build`] | voxeliser stream → blocks, sub-cube by sub-cube: the pipeline and the trunk |
+//! | `fit` | contour fitting per voxel, top-down (§5.2–5.3) |
+//! | `emit` | an octree's descriptors into blocks: far pointers, whole and split subtrees |
+//! | `blocks` | the open block and the finished words: page headers, info sections, attachments |
 //! | [`contour`] | 32-bit contours: fitting, encoding, the slab a kernel intersects |
 //! | [`attributes`] | raw and compressed colour/normal encodings |
 //! | [`compress`] | fitting a compressed block's colour endpoints and normal grid |
@@ -12,9 +15,12 @@
 //! CPU ray caster (Fig. 15, beam optimisation §6.2): `kernels::cpu::esvo`.
 
 pub mod attributes;
+mod blocks;
 pub mod build;
 pub mod compress;
 pub mod contour;
+mod emit;
+mod fit;
 pub mod layout;
 pub mod read;
 
@@ -165,8 +171,9 @@ pub struct EsvoStats {
     pub colour_bytes: u64,
     pub normal_bytes: u64,
     pub lookup_bytes: u64,
-    /// Build phases after voxelising, wall-clock: contour fitting, laying out the descriptors
-    /// (with the raw attachment's values), and the compressed attachment's blocks.
+    /// Build phases, wall-clock, overlapping the voxeliser: the sub-cubes' octrees with their
+    /// contour fitting (one parallel pass per batch), laying out the descriptors (with the raw
+    /// attachment's values), and the compressed attachment's blocks.
     pub contour_ms: f64,
     pub layout_ms: f64,
     pub attributes_ms: f64,
