@@ -166,6 +166,12 @@ impl BlockWriter {
         self.open.kinds[s] = kind;
     }
 
+    /// Marks the new slot `slot` as a far pointer (its value is written when its target is).
+    pub(super) fn reserve_far(&mut self, slot: u64) {
+        self.set_kind(slot, Slot::Far);
+        self.stats.far_pointers += 1;
+    }
+
     /// Closes the open block (computing the compressed blocks it still owes from `tree`) and opens
     /// an empty one.
     pub(super) fn next_block(&mut self, trees: &[Octree]) -> Result<(), BuildError> {

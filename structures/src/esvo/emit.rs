@@ -112,8 +112,10 @@ impl<'a> Emitter<'a> {
         if !w.open.fits(whole, w.cap) && !w.open.is_empty() {
             w.next_block(self.trees)?;
         }
-        let external = self.is_external(0);
-        if !self.has_group(0) || (!external && w.open.fits(whole, w.cap)) {
+        // The root's group is never external: a tree of one sub-cube is emitted from its root,
+        // and a trunk's root lies above its sub-cubes' roots.
+        debug_assert!(!self.is_external(0));
+        if !self.has_group(0) || w.open.fits(whole, w.cap) {
             // The common case: the root's group follows it in the same block.
             let slot = w.alloc(1);
             self.write_second_word(w, 0, 0, slot)?;
@@ -122,9 +124,8 @@ impl<'a> Emitter<'a> {
         }
         let slot = w.alloc(2);
         self.write_second_word(w, 0, 0, slot)?;
-        w.set_kind(slot + 1, Slot::Far);
-        w.stats.far_pointers += 1;
-        let group = if external { self.externals[0] } else { self.emit_group(w, 0, 0)? };
+        w.reserve_far(slot + 1);
+        let group = self.emit_group(w, 0, 0)?;
         self.link_far(w, 0, 0, slot, slot + 1, group)?;
         Ok(slot)
     }
@@ -159,9 +160,8 @@ impl<'a> Emitter<'a> {
             return Ok(group);
         }
         for k in 0..m {
-            w.set_kind(group + (m + k) as u64, Slot::Far);
+            w.reserve_far(group + (m + k) as u64);
         }
-        w.stats.far_pointers += m as u64;
         for k in 0..m {
             let child = first + k;
             let target =
@@ -182,8 +182,7 @@ impl<'a> Emitter<'a> {
         let mut next_far = group + m as u64;
         for k in 0..m {
             let far = (flags >> k & 1 == 1).then(|| {
-                w.set_kind(next_far, Slot::Far);
-                w.stats.far_pointers += 1;
+                w.reserve_far(next_far);
                 next_far += 1;
                 next_far - 1
             });
