@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use crate::anim::{ANIMATED_SCENES, Animation, DEFAULT_FRAMES};
 use crate::error::SceneError;
 use crate::load;
 use crate::procedural;
@@ -55,8 +56,9 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
     }))
 }
 
-/// Resolves a scene name: a built-in scene, `grass-<N>` (N like `2500`, `10k`, `1m`), or a path
-/// to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
+/// Resolves a scene name: a built-in scene, `grass-<N>` (N like `2500`, `10k`, `1m`), an animated
+/// scene's frame (`kitchen-anim` is frame 0 of [`DEFAULT_FRAMES`], `kitchen-anim@f<t>` frame t), or
+/// a path to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
 /// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
 pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
     if let Some((base, levels)) = subdivision(name) {
@@ -83,6 +85,8 @@ pub fn subdivided(mut scene: Scene, name: &str, levels: u32) -> Result<Scene, Sc
         o.triangle_count *= factor;
     }
     scene.name = name.into();
+    // More triangles than the animation's frames have: no longer a frame of it.
+    scene.animation = None;
     Ok(scene)
 }
 
@@ -104,9 +108,40 @@ pub fn estimated_triangles(name: &str) -> Option<u64> {
     name.strip_prefix("grass-").and_then(parse_count).map(|n| n as u64)
 }
 
+/// `kitchen-anim` → the animation of [`DEFAULT_FRAMES`] frames, as its frame 0; `kitchen-anim@f<t>`
+/// → frame t alone, a static scene (`animation` is `None`, so a temporal structure builds that one
+/// frame, not the animation from frame 0) named as asked. Any other suffix after an animated
+/// scene's name is an error; `None` when the name before any `@` is not an animated scene's.
+fn animation_frame(name: &str) -> Option<Result<Scene, SceneError>> {
+    let (base, suffix) = name.split_once('@').map_or((name, None), |(base, suffix)| (base, Some(suffix)));
+    let animation = Animation::named(base, DEFAULT_FRAMES)?;
+    let Some(suffix) = suffix else {
+        return Some(Ok(animation.frame(0)));
+    };
+    // `f` and decimal digits only (`parse` alone would take `f+3`).
+    let digits = suffix.strip_prefix('f').filter(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()));
+    let Some(t) = digits.and_then(|d| d.parse::<u32>().ok()) else {
+        return Some(Err(SceneError::UnknownScene {
+            name: name.into(),
+            detail: format!(
+                "'@{suffix}' is not a frame: expected {base}@f<t>, t a frame number from 0 to {}, e.g. {base}@f3",
+                u32::MAX
+            ),
+        }));
+    };
+    let mut frame = animation.frame(t);
+    frame.animation = None;
+    frame.name = name.into();
+    frame.mesh.name = name.into();
+    Some(Ok(frame))
+}
+
 fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
     if let Some(scene) = shipped_asset(name) {
         return scene;
+    }
+    if let Some(frame) = animation_frame(name) {
+        return frame;
     }
     if let Some(count) = name.strip_prefix("grass-") {
         let n = parse_count(count).ok_or_else(|| SceneError::UnknownScene {
@@ -131,8 +166,10 @@ fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
         _ => Err(SceneError::UnknownScene {
             name: name.into(),
             detail: format!(
-                "not a built-in scene ({}, grass-<N>) nor a path ending in .obj, .obj.gz, .gltf or .glb",
-                BUILTIN_SCENES.join(", ")
+                "not a built-in scene ({}, grass-<N>), an animated scene ({}, each with an optional @f<frame>) \
+                 nor a path ending in .obj, .obj.gz, .gltf or .glb",
+                BUILTIN_SCENES.join(", "),
+                ANIMATED_SCENES.join(", ")
             ),
         }),
     }
@@ -177,5 +214,32 @@ mod tests {
     fn unknown_names_are_rejected_with_the_list() {
         let err = load_scene("dragon-12k").expect_err("no such scene").to_string();
         assert!(err.contains("unknown scene 'dragon-12k'") && err.contains("bunny"), "{err}");
+        assert!(err.contains("kitchen-anim") && err.contains("@f<frame>"), "{err}");
+    }
+
+    #[test]
+    fn animated_names_load_frames_and_reject_bad_suffixes() {
+        let frame = load_scene("kitchen-anim@f3").expect("kitchen-anim@f3");
+        let expected = Animation::named("kitchen-anim", DEFAULT_FRAMES).expect("an animated scene").frame(3);
+        assert_eq!(frame.mesh.positions, expected.mesh.positions);
+        // Frame t alone: the same scene, but not an animation.
+        assert_eq!(frame, Scene { animation: None, ..expected });
+        assert_eq!(frame.name, "kitchen-anim@f3");
+        let first = load_scene("robots-anim").expect("robots-anim");
+        assert_eq!(first.name, "robots-anim");
+        assert_eq!(first.animation.as_ref().map(|a| a.frames), Some(DEFAULT_FRAMES));
+        let alone = load_scene("robots-anim@f0").expect("robots-anim@f0");
+        assert_eq!((alone.name.as_str(), &alone.animation), ("robots-anim@f0", &None));
+        assert_eq!((&alone.mesh.positions, &alone.objects), (&first.mesh.positions, &first.objects));
+        for bad in
+            ["fire-anim@3", "fire-anim@f", "fire-anim@f-1", "fire-anim@f+1", "fire-anim@f99999999999", "fire-anim@x"]
+        {
+            let err = load_scene(bad).expect_err(bad).to_string();
+            assert!(err.contains(&format!("unknown scene '{bad}'")) && err.contains("fire-anim@f<t>"), "{err}");
+        }
+        // Subdividing changes the triangles: the result is no longer a frame of the animation.
+        let sub = load_scene("fire-anim@f2@sub1").expect("fire-anim@f2@sub1");
+        assert_eq!(sub.triangle_count(), 4 * load_scene("fire-anim@f2").expect("fire-anim@f2").triangle_count());
+        assert_eq!(sub.animation, None);
     }
 }

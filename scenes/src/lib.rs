@@ -2,8 +2,10 @@
 //!
 //! Spec: DESIGN.md §3 (shared contracts) and §6 (scenes). Loaders live in [`load`], the
 //! deterministic procedural scenes in [`procedural`], and [`builtin`] resolves the scene names
-//! the command line uses (`bunny`, `dragon-48k`, `grass-10k`, a file path, …).
+//! the command line uses (`bunny`, `dragon-48k`, `grass-10k`, a file path, …). [`anim`] holds the
+//! animated scenes, whose frames share one topology and one bounding box (`kitchen-anim@f3`).
 
+pub mod anim;
 pub mod builtin;
 pub mod camera;
 pub mod error;
@@ -14,6 +16,7 @@ pub mod procedural;
 pub mod scene;
 pub mod subdivide;
 
+pub use anim::{ANIMATED_SCENES, Animation, DEFAULT_FRAMES};
 pub use builtin::{BUILTIN_SCENES, load_scene};
 pub use camera::{Camera, CameraSpec};
 pub use error::{Location, SceneError};

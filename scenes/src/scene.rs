@@ -1,9 +1,11 @@
-//! A scene: one merged triangle mesh plus named objects, an optional camera and light.
+//! A scene: one merged triangle mesh plus named objects, an optional camera and light, and, for a
+//! frame of an animated scene, the animation it belongs to.
 
 use std::sync::Arc;
 
 use glam::Vec3;
 
+use crate::anim::Animation;
 use crate::camera::CameraSpec;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
@@ -35,6 +37,11 @@ pub struct Scene {
     pub camera: Option<CameraSpec>,
     /// A point light, for shadow workloads.
     pub light: Option<Vec3>,
+    /// The animation this scene is a frame of ([`Animation::frame`]), or `None` for a static
+    /// scene. Every frame of one animation has the same triangles, objects and bounds; only vertex
+    /// positions move, so the temporal SVDAG can voxelise all frames into one grid (DESIGN.md §6).
+    /// Anything that changes the triangles (`@sub<k>`) drops it.
+    pub animation: Option<Animation>,
 }
 
 impl Scene {
@@ -53,6 +60,7 @@ impl Scene {
             objects: vec![object],
             camera: None,
             light: None,
+            animation: None,
         }
     }
 

@@ -4,12 +4,18 @@
 //! (one PCG stream per scene, consumed in a fixed order; no hash-map iteration; parallel work only
 //! where each output element is computed independently). Each scene's `provenance` names its
 //! generator, parameters and seed, and its `objects` partition the triangles in order.
+//!
+//! The animated scenes (`*_anim`) are pure functions of (seed, time) as well; they are reached
+//! through [`crate::anim::Animation`], which adds the frame to their name and provenance.
 
 mod city;
+mod fire_anim;
 mod flat;
 mod grass;
+mod kitchen_anim;
 mod mandelbulb;
 mod menger;
+mod robots_anim;
 mod room;
 mod shapes;
 mod stadium;
@@ -71,4 +77,22 @@ pub fn flat(seed: u64) -> Scene {
 /// SVDAG workload (DESIGN.md §4.4).
 pub fn room(seed: u64) -> Scene {
     room::generate(seed)
+}
+
+/// The `kitchen-anim` scene at `time` seconds: a furnished room, mostly static, with a rolling
+/// ball, a spinning top, a toy car, a ceiling fan and a sliding drawer (like BART Kitchen).
+pub(crate) fn kitchen_anim(seed: u64, time: f32) -> Scene {
+    kitchen_anim::generate(seed, time)
+}
+
+/// The `robots-anim` scene at `time` seconds: 30 articulated robots walking rings round a column
+/// in a walled arena (like BART Robots).
+pub(crate) fn robots_anim(seed: u64, time: f32) -> Scene {
+    robots_anim::generate(seed, time)
+}
+
+/// The `fire-anim` scene at `time` seconds: 2500 tumbling particles with cyclic lifetimes rising
+/// over a hearth in a closed fireplace (like BART Fire).
+pub(crate) fn fire_anim(seed: u64, time: f32) -> Scene {
+    fire_anim::generate(seed, time)
 }

@@ -52,7 +52,7 @@ impl SceneBuilder {
         let mut mesh = self.mesh;
         mesh.name = name.to_string();
         mesh.provenance = provenance.clone();
-        Scene { name: name.to_string(), provenance, mesh, objects: self.objects, camera, light }
+        Scene { name: name.to_string(), provenance, mesh, objects: self.objects, camera, light, animation: None }
     }
 }
 
@@ -143,4 +143,54 @@ pub(super) fn sphere_profile(stacks: u32) -> Vec<Vec2> {
             Vec2::new(radius, theta.cos())
         })
         .collect()
+}
+
+/// A closed cylinder of `radius` standing on y = 0 up to `height`, as a lathe profile (top pole,
+/// rim, bottom rim, bottom pole).
+pub(super) fn cylinder_profile(radius: f32, height: f32) -> Vec<Vec2> {
+    vec![Vec2::new(0.0, height), Vec2::new(radius, height), Vec2::new(radius, 0.0), Vec2::new(0.0, 0.0)]
+}
+
+/// A closed vessel (cup, bowl, pot, bin) with walls `wall` thick, as a lathe profile.
+///
+/// `outline` is the outer silhouette as (radius, height) points from the rim down to the foot,
+/// radii positive and heights decreasing. The profile walks the solid's cross-section the way
+/// [`push_lathe`] needs (as [`sphere_profile`] does, top pole to bottom pole): from the pole on the
+/// inner floor, up the inner wall (the outline moved `wall` inwards, reversed), across the rim, down
+/// the outer wall to the pole under the foot. So the vessel is one closed two-manifold with real
+/// wall thickness, not an open band that would break shadow SVDAG's depth maps (DESIGN.md §4.4).
+pub(super) fn vessel_profile(outline: &[Vec2], wall: f32) -> Vec<Vec2> {
+    let foot = outline.last().copied().unwrap_or(Vec2::ZERO);
+    let floor = foot.y + wall;
+    // Moved inwards, but never through the axis (a thin stem keeps half its radius).
+    let inner = |p: Vec2| Vec2::new((p.x - wall).max(0.5 * p.x), p.y);
+    // A flat inner floor out to the inner wall, then up the inner wall: every outline point above
+    // the floor, bottom to top.
+    let mut profile = vec![Vec2::new(0.0, floor), inner(foot.with_y(floor))];
+    profile.extend(outline.iter().rev().filter(|p| p.y > floor).map(|&p| inner(p)));
+    profile.extend_from_slice(outline);
+    profile.push(Vec2::new(0.0, foot.y));
+    profile
+}
+
+/// The transform that maps the cube `[-0.5, 0.5]³` of [`push_box`] onto the box `[min, max]`.
+pub(super) fn box_between(min: Vec3, max: Vec3) -> Mat4 {
+    Mat4::from_scale_rotation_translation(max - min, glam::Quat::IDENTITY, 0.5 * (min + max))
+}
+
+/// Appends the regular octahedron with vertices at `±1` on each axis, mapped by `transform`
+/// (handedness-preserving): 6 shared vertices, 8 triangles, closed and wound outwards. The
+/// smallest closed solid after the tetrahedron that looks the same from every side, for particles.
+pub(super) fn push_octahedron(mesh: &mut Mesh, transform: Mat4) {
+    let base = mesh.positions.len() as u32;
+    // Vertex 2·axis + k is at +1 (k = 0) or −1 (k = 1) on `axis`.
+    for axis in Vec3::AXES {
+        mesh.positions.extend([axis, -axis].map(|corner| transform.transform_point3(corner)));
+    }
+    for octant in 0..8u32 {
+        let k = |axis: u32| (octant >> axis) & 1;
+        let [x, y, z] = [0, 1, 2].map(|axis| base + 2 * axis + k(axis));
+        // (+x, +y, +z) is counter-clockwise seen from outside; each negated axis mirrors it.
+        if (k(0) + k(1) + k(2)).is_multiple_of(2) { mesh.indices.push([x, y, z]) } else { mesh.indices.push([x, z, y]) }
+    }
 }

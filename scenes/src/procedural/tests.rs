@@ -6,6 +6,8 @@ use glam::Vec3;
 use super::*;
 use crate::scene::Object;
 
+mod anim;
+
 const SEED: u64 = 0xACCE_1BE7C4;
 
 /// A tetrahedron standing in for the teapot (the OBJ loader is not needed to test the stadium).
