@@ -176,11 +176,16 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
             let level = input.params.get("voxel.levels", 10u32).unwrap_or(10);
             let voxels = structures::voxel::estimate_surface_voxels(input.scene, &input.triangles, level);
             match voxel {
-                // The streamed build holds a batch of sub-cubes and the DAG, never the octree, and
-                // the DAG grows about 2× per level where the surface grows 4× (voxels^0.54 on the
-                // dragon): fitted to its peaks at L = 15 and 16 (1.39 GB, 3.36 GB; estimates 1.06×
-                // and 1.0×) with the exponent rounded up to 0.6, which leaves L = 10 at 1.9×.
-                "svdag" => 16.0 * 1_048_576.0 + 32.0 * n + 3300.0 * voxels.powf(0.6),
+                "svdag" => svdag_bytes(n, voxels),
+                // `all` holds every frame's DAG before merging them; `incremental` the growing DAG,
+                // one frame's batch and the previous frame's triangles: bounded here by two frames'
+                // DAGs (a frame adds a fraction of one; issue 13's scenes at 1024³ add 2–60 %).
+                "svdag-temporal" => {
+                    let frames = input.scene.animation.as_ref().map_or(1, |a| a.frames) as f64;
+                    let all = input.params.get("svdag.temporal", String::new()).is_ok_and(|m| m == "all");
+                    let per_frame = svdag_bytes(n, voxels);
+                    if all { frames * per_frame } else { 2.0 * per_frame + 64.0 * n }
+                }
                 // The sub-cube build holds the finished words, one batch of sub-cubes (4 M voxels:
                 // chunks, octrees, contours, ~100 B each) and the triangles' setup, never the
                 // whole octree: the words are 9.5–10.5 B per leaf voxel (compressed attributes; raw
@@ -199,6 +204,14 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
         }
     };
     bytes.min(u64::MAX as f64) as u64
+}
+
+/// The streamed SVDAG build holds a batch of sub-cubes and the DAG, never the octree, and the DAG
+/// grows about 2× per level where the surface grows 4× (voxels^0.54 on the dragon): fitted to
+/// its peaks at L = 15 and 16 (1.39 GB, 3.36 GB; estimates 1.06× and 1.0×) with the exponent
+/// rounded up to 0.6, which leaves L = 10 at 1.9×.
+fn svdag_bytes(triangles: f64, voxels: f64) -> f64 {
+    16.0 * 1_048_576.0 + 32.0 * triangles + 3300.0 * voxels.powf(0.6)
 }
 
 /// What to say when a build is refused.

@@ -89,6 +89,12 @@ pub enum Preset {
     /// (`esvo.lod_pixels=1`) against L = 11 without; L = 11 forced into ~100 blocks beside its one
     /// block. Long: about 20 minutes and 8 GB on 2 cores.
     EsvoScale,
+    /// Seed 001 Tables 5–6 on kitchen-anim, robots-anim and fire-anim (24 frames at 1024³): nodes
+    /// per frame and in all for the SVO, a difference tree, each frame's SVDAG and the temporal
+    /// SVDAG (both merge modes, with their build peaks), the per-frame append time, and the CPU
+    /// frame rate rendering every frame through its root at 1024×768, 800×600 and 400×300; the
+    /// reference BVH and a plain SVDAG of frame 0 beside them. About 10 minutes on 2 cores.
+    SvdagTemporal,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -144,6 +150,10 @@ pub struct RunArgs {
     /// Untimed warm-up repetitions before the timed ones.
     #[arg(long)]
     pub warmup: Option<u32>,
+    /// Animated scenes (kitchen-anim, robots-anim, fire-anim): how many frames, 0…N − 1, the
+    /// animation has; svdag-temporal merges them all (default 16; the svdag-temporal preset 24).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: Option<u32>,
     /// Voxel structures (svo-naive, svo, esvo, svdag): resolution 2^L per axis; a list (e.g.
     /// 8,10,12) measures each voxel structure once per level, for the report's scaling plots.
     /// Overrides voxel.levels (default 10; presets: quick and ci 7, default 9) and a preset's own
@@ -260,6 +270,10 @@ pub struct Plan {
     pub params: Vec<String>,
     /// Voxel levels to sweep (`--levels`); empty: the one `voxel.levels` of `params`.
     pub levels: Vec<u32>,
+    /// Frames of each animated scene (`--frames`, or the preset's); `None`: the scene's default.
+    pub frames: Option<u32>,
+    /// Image sizes a structure holding many frames renders its animation at, frame by frame.
+    pub animation_sizes: Vec<(u32, u32)>,
 }
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
@@ -282,6 +296,7 @@ impl Preset {
             Preset::OrgFast => "org-fast",
             Preset::SvdagTables => "svdag-tables",
             Preset::EsvoScale => "esvo-scale",
+            Preset::SvdagTemporal => "svdag-temporal",
         }
     }
 
@@ -310,6 +325,11 @@ impl Preset {
                     at(14, &["esvo.lod_pixels=1"], Some("lod1")),
                 ])
                 .collect(),
+            // Both of seed 001 §4's merges: their words are identical, their peaks are not.
+            (Preset::SvdagTemporal, "svdag-temporal") => vec![
+                (vec!["svdag.temporal=incremental".into()], Some("incremental".into())),
+                (vec!["svdag.temporal=all".into()], Some("all".into())),
+            ],
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -320,17 +340,23 @@ impl Preset {
 
     fn structures(self) -> Vec<String> {
         let list: Vec<&str> = match self {
-            Preset::Quick | Preset::Default => kernels::STRUCTURES.iter().map(|s| s.name).collect(),
+            // Not `svdag-temporal`: on these presets' static scenes it is `svdag` again (one frame).
+            Preset::Quick | Preset::Default => {
+                kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "svdag-temporal").collect()
+            }
             // Not `embree`: its BVH (4- or 8-wide) and its triangle test's rounding follow the
             // CPU's instruction set, so its bytes and agreement counts are not deterministic across
             // machines of one kind, which the gate assumes. Its tests run in CI all the same.
-            Preset::Ci => kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree").collect(),
+            Preset::Ci => {
+                kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree" && s != "svdag-temporal").collect()
+            }
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
             Preset::OrgFast => vec!["bvh", "embree", "org"],
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
             Preset::EsvoScale => vec!["bvh", "esvo"],
+            Preset::SvdagTemporal => vec!["bvh", "svdag", "svdag-temporal"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -347,6 +373,8 @@ impl Preset {
             Preset::Default => &["voxel.levels=9"],
             // Table 3 times the SVO → SVDAG conversion alone: build the octree first.
             Preset::SvdagTables => &["svdag.build=octree"],
+            // 1024³, the resolution of seed 001's Table 5 scenes' comparisons (issue 13).
+            Preset::SvdagTemporal => &["voxel.levels=10"],
             Preset::OrgFast | Preset::EsvoScale => &[],
         }
     }
@@ -365,6 +393,7 @@ impl Preset {
             Preset::SvdagTables => vec!["bunny", "dragon", "menger", "city", "mandelbulb"],
             Preset::OrgFast => vec!["bunny", "dragon-48k", "city", "terrain", "dragon"],
             Preset::EsvoScale => vec!["dragon"],
+            Preset::SvdagTemporal => scenes::ANIMATED_SCENES.to_vec(),
         };
         list.into_iter().map(String::from).collect()
     }
@@ -387,6 +416,24 @@ impl Preset {
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
             Preset::OrgFast | Preset::EsvoScale => (1024, 1024),
+            Preset::SvdagTemporal => (1024, 768),
+        }
+    }
+
+    /// Frames of an animated scene the preset asks for (`--frames` overrides).
+    fn frames(self) -> Option<u32> {
+        match self {
+            Preset::SvdagTemporal => Some(24),
+            _ => None,
+        }
+    }
+
+    /// Image sizes a many-frame structure renders its whole animation at (seed 001 Table 6);
+    /// empty: the run's one size.
+    fn animation_sizes(self) -> Vec<(u32, u32)> {
+        match self {
+            Preset::SvdagTemporal => vec![(1024, 768), (800, 600), (400, 300)],
+            _ => Vec::new(),
         }
     }
 
@@ -454,6 +501,11 @@ impl RunArgs {
                 .chain(self.params.iter().cloned())
                 .collect(),
             levels: self.levels.clone(),
+            frames: self.frames.or(preset.frames()),
+            animation_sizes: match (preset.animation_sizes(), self.width.is_some() || self.height.is_some()) {
+                (sizes, false) if !sizes.is_empty() => sizes,
+                _ => vec![(self.width.unwrap_or(w), self.height.unwrap_or(h))],
+            },
         }
     }
 }

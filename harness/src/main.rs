@@ -64,13 +64,20 @@ fn list(what: ListWhat) {
         for s in scenes::BUILTIN_SCENES {
             println!("  {s}");
         }
+        println!(
+            "animated scenes ({} frames unless --frames N; <name>@f<t> is frame t alone, for any structure):",
+            scenes::anim::DEFAULT_FRAMES
+        );
+        for s in scenes::ANIMATED_SCENES {
+            println!("  {s}");
+        }
     }
     if all || what == ListWhat::Structures {
         println!("structures:");
         for s in kernels::STRUCTURES {
-            println!("  {:<10} {:<9} {}", s.name, s.family, s.summary);
+            println!("  {:<14} {:<9} {}", s.name, s.family, s.summary);
             if let Err(why) = (s.available)() {
-                println!("  {:<10} {:<9} unavailable here: {why}", "", "");
+                println!("  {:<14} {:<9} unavailable here: {why}", "", "");
             }
         }
     }

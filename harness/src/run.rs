@@ -11,7 +11,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use kernels::cpu::render::{self, Frame, ShadeContext, Workload};
 use kernels::gpu::GpuContext;
 use kernels::{Accel, StructureEntry};
-use reports::{BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedCase, SkippedRender, Timing};
+use reports::{
+    AnimationRender, BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedCase, SkippedRender, Timing,
+};
 use scenes::{Camera, Scene, Triangle};
 use structures::{BuildInput, Params};
 
@@ -91,7 +93,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                 .collect();
             bar.set_message(format!("{scene_name}: loading"));
             let t = Instant::now();
-            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, &budget))
+            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, &budget, plan.frames))
                 .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))));
             let scene = match loaded {
                 Ok(scene) => scene,
@@ -161,13 +163,22 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
 
 /// Loads a scene within the budget: a scene whose name gives its size is checked before it is
 /// generated, a subdivided one after its base is loaded and before it is subdivided.
-fn load_scene(name: &str, budget: &Budget) -> Result<Scene> {
+fn load_scene(name: &str, budget: &Budget, frames: Option<u32>) -> Result<Scene> {
+    let mut scene = load_scene_alone(name, budget)?;
+    // An animated scene's frame count is the run's (`--frames`), not its default.
+    if let (Some(anim), Some(frames)) = (scene.animation.as_mut(), frames) {
+        anim.frames = frames;
+    }
+    Ok(scene)
+}
+
+fn load_scene_alone(name: &str, budget: &Budget) -> Result<Scene> {
     let hint = "a smaller scene or a larger --memory-limit";
     if let Some(bytes) = budget::scene_bytes(name) {
         budget.check(format!("scene '{name}'"), bytes, hint)?;
     } else if let Some((base, k)) = scenes::builtin::subdivision(name) {
         // The base is loaded once: checked, then subdivided.
-        let base = load_scene(base, budget)?;
+        let base = load_scene_alone(base, budget)?;
         let triangles = base.triangle_count() as u64;
         let bytes = triangles.saturating_mul(4u64.pow(k)).saturating_mul(budget::SCENE_BYTES_PER_TRIANGLE);
         budget.check(format!("scene '{name}' ({triangles} × 4^{k} triangles)"), bytes, hint)?;
@@ -373,6 +384,7 @@ fn measure_case(
         images: Vec::new(),
         machine: None,
         skipped: Vec::new(),
+        animation: Vec::new(),
     };
     let camera = Camera::new(scene.camera_spec(), plan.width, plan.height);
     let shade = ShadeContext::for_scene(scene, args.seed);
@@ -441,10 +453,61 @@ fn measure_case(
             case.render.push(stats);
         }
     }
+    if accel.frame_count() > 1 && plan.backends.contains(&Backend::Cpu) {
+        for &(width, height) in &plan.animation_sizes {
+            bar.set_message(format!(
+                "{}/{structure}: rendering {} frames at {width}×{height}",
+                scene.name,
+                accel.frame_count()
+            ));
+            case.animation.push(timed_animation(accel.as_ref(), scene, width, height, &shade, plan));
+        }
+    }
     if structure == REFERENCE {
         ctx.reference = Some(accel);
     }
     Ok(case)
+}
+
+/// Renders every frame of a many-frame structure (a temporal SVDAG), each through its own root,
+/// `warmup + reps` times; a repetition is the whole animation, its time over the frames the time
+/// per frame (seed 001 Table 6's frame rate). The camera is the scene's own, as in every frame.
+fn timed_animation(
+    accel: &dyn Accel,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    shade: &ShadeContext,
+    plan: &Plan,
+) -> AnimationRender {
+    let camera = Camera::new(scene.camera_spec(), width, height);
+    let frames: Vec<Box<dyn kernels::Traverse + '_>> =
+        (0..accel.frame_count()).filter_map(|f| accel.frame(f)).collect();
+    let mut own = Frame::new(width, height);
+    let mut samples = Vec::new();
+    let mut hit_fractions = 0.0;
+    for i in 0..plan.warmup + plan.reps.max(1) {
+        let t = Instant::now();
+        for view in &frames {
+            render::render_into(view.as_ref(), &camera, shade, Workload::Primary, &mut own);
+            if i == 0 {
+                hit_fractions += own.hit_fraction();
+            }
+        }
+        if i >= plan.warmup {
+            samples.push(ms_since(t) / frames.len() as f64);
+        }
+    }
+    let timing = Timing::from_samples(&samples);
+    AnimationRender {
+        frames: frames.len() as u32,
+        threads: plan.threads,
+        width,
+        height,
+        fps: if timing.ms_median > 0.0 { 1e3 / timing.ms_median } else { 0.0 },
+        timing,
+        hit_fraction: hit_fractions / frames.len().max(1) as f64,
+    }
 }
 
 /// Builds the reference structure, untimed.

@@ -86,6 +86,16 @@ pub trait Traverse: Send + Sync {
     fn post_filter(&self, _camera: &Camera, _frame: &cpu::render::Frame, _rgb: &[u8]) -> Option<Vec<u8>> {
         None
     }
+    /// Frames of an animation the structure holds (a temporal SVDAG: one root per frame); 1 for
+    /// every other structure, which stands for its scene as given.
+    fn frame_count(&self) -> usize {
+        1
+    }
+    /// Frame `frame`'s traversal, `frame < frame_count()`: the same kernels from that frame's root.
+    /// `None` for one-frame structures (traverse the structure itself).
+    fn frame(&self, _frame: usize) -> Option<Box<dyn Traverse + '_>> {
+        None
+    }
     /// Which of [`Counters`]' per-ray counts the counting path really counts. A library's own
     /// traversal (obvhs, Embree) exposes no steps or node visits; the report shows a dash there
     /// rather than a zero.

@@ -164,6 +164,16 @@ pub static STRUCTURES: &[StructureEntry] = &[
         build: |input| Ok(Box::new(structures::svdag::Svdag::build(input)?)),
         available: always,
     },
+    StructureEntry {
+        name: "svdag-temporal",
+        family: "voxel",
+        summary: "temporal SVDAG (seed 001 §4): every frame of an animated scene (--frames N) merged into one DAG, \
+                  a root per frame; renders frame 0; svdag.temporal=incremental|all, --levels L, svdag.leaves",
+        params: &["voxel.levels", "svdag.leaves", "svdag.build", "svdag.temporal"],
+        check: |p| structures::svdag::temporal::TemporalParams::from_params(p).map(drop),
+        build: |input| Ok(Box::new(structures::svdag::temporal::TemporalSvdag::build(input)?)),
+        available: always,
+    },
 ];
 
 /// `bvh`, `obvhs` and `cwbvh` share one build and so one parameter, `bvh.preset`.

@@ -14,5 +14,6 @@ pub mod references;
 pub mod scaling;
 pub mod schema;
 pub mod svdag_tables;
+pub mod svdag_temporal;
 
 pub use schema::*;

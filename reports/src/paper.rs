@@ -23,6 +23,8 @@ pub fn section(results: &Results) -> String {
         "esvo-scale" => esvo_scale(results),
         _ => String::new(),
     };
+    // Tables 5–6 wherever a run has temporal SVDAG cases.
+    out.push_str(&crate::svdag_temporal::section(results));
     out.push_str(&esvo_budget(results));
     out
 }

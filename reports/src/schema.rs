@@ -184,6 +184,27 @@ pub struct Case {
     /// a workload the GPU backend does not run).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub skipped: Vec<SkippedRender>,
+    /// A structure holding every frame of an animation (`svdag-temporal`): the whole animation
+    /// rendered frame by frame, each frame through its own root, at one or more image sizes
+    /// (seed 001 Table 6's frame rates).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub animation: Vec<AnimationRender>,
+}
+
+/// Every frame of an animation rendered once per repetition (primary rays, shaded, on the CPU);
+/// `timing` is per frame: a repetition's wall time over the frames.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AnimationRender {
+    pub frames: u32,
+    pub threads: usize,
+    pub width: u32,
+    pub height: u32,
+    #[serde(flatten)]
+    pub timing: Timing,
+    /// Frames per second at the median repetition.
+    pub fps: f64,
+    /// Hit fraction over all frames' pixels.
+    pub hit_fraction: f64,
 }
 
 /// A (backend, workload) of the matrix a case skipped.

@@ -87,7 +87,7 @@ fn compare(
     ctx: &kernels::gpu::GpuContext,
     scene: &str,
     label: &str,
-    accel: &dyn kernels::Accel,
+    accel: &dyn kernels::Traverse,
     camera: &Camera,
     shade: &ShadeContext,
     started: Instant,
@@ -199,4 +199,42 @@ fn svdag_variants() {
         }
     }
     assert!(failures.is_empty(), "SVDAG variants differ from the CPU:\n{}", failures.join("\n"));
+}
+
+/// A temporal SVDAG's frames: each frame's root, a kernel parameter, renders on the GPU exactly as
+/// on the CPU (the frames differ, so a root ignored by either side would show).
+#[test]
+fn svdag_temporal_frames() {
+    let Some(ctx) = context_for_tests("gpu::svdag_temporal_frames") else {
+        return;
+    };
+    let mut failures = Vec::new();
+    for name in ["kitchen-anim", "robots-anim"] {
+        let mut scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        scene.animation.as_mut().expect("animated").frames = 4;
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        let params = Params::parse(["voxel.levels=9"]).expect("params");
+        let t = Instant::now();
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let accel = tests::build_entry(kernels::find_structure("svdag-temporal").expect("registered"), &input)
+            .expect("svdag-temporal builds");
+        assert_eq!(accel.frame_count(), 4);
+        let mut frames = Vec::new();
+        for f in 0..4 {
+            let view = accel.frame(f).expect("a frame");
+            failures.extend(compare(ctx, name, &format!("frame-{f}"), view.as_ref(), &camera, &shade, t));
+            let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+            let gpu = render_primary(ctx, view.as_ref(), &camera, &opts).expect("renders").expect("a GPU program");
+            let d = diff(&gpu.frame, &render(view.as_ref(), &camera, &shade, Workload::Primary));
+            if d.hit_mismatches > 0 || d.prim_mismatches > 0 {
+                failures.push(format!("{name} frame {f}: not exact: {d:?}"));
+            }
+            frames.push(gpu.frame);
+        }
+        let moved =
+            frames.windows(2).filter(|w| diff(&w[0], &w[1]).prim_mismatches + diff(&w[0], &w[1]).hit_mismatches > 0);
+        assert!(moved.count() >= 2, "{name}: the frames should differ");
+    }
+    assert!(failures.is_empty(), "temporal SVDAG frames differ from the CPU:\n{}", failures.join("\n"));
 }

@@ -13,7 +13,8 @@
 use glam::Vec3;
 use scenes::{Camera, Ray};
 use structures::svdag::layout::{CHILD_MASK, brick_byte, brick_child_mask, brick_mask, pointer_index};
-use structures::svdag::{Leaves, Svdag};
+use structures::svdag::temporal::{Frame, TemporalSvdag};
+use structures::svdag::{Leaves, Root, Svdag};
 use structures::voxel::morton;
 
 use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
@@ -24,6 +25,8 @@ use crate::{Counters, Hit, NoStats, Stats, Traverse};
 /// The DAG's words as the caster sees them. `Desc` is `[child mask, node]`.
 struct DagNodes<'a> {
     words: &'a [u32],
+    /// Word index of the root the cast starts from.
+    root: u32,
     /// Scale of the leaf voxels (`S_MAX − L`).
     leaf_scale: u32,
     bricks: bool,
@@ -35,7 +38,7 @@ impl CastNodes for DagNodes<'_> {
 
     #[inline(always)]
     fn root(&self) -> u32 {
-        0
+        self.root
     }
     #[inline(always)]
     fn fetch(&self, node: u32, scale: u32) -> [u32; 2] {
@@ -87,31 +90,74 @@ fn face_normal(ray: &Ray, h: &CastHit<u32>) -> Vec3 {
     best.1
 }
 
-fn trace<S: Stats>(dag: &Svdag, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+/// Casts `ray` from `root` (a temporal SVDAG's frame, or the plain DAG's only root).
+fn trace<S: Stats>(dag: &Svdag, root: Root, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     // A NaN span is empty (the clip below would drop a NaN bound).
     if dag.is_empty() || span_is_empty(t_min, t_max) {
         return None;
     }
-    let nodes =
-        DagNodes { words: &dag.words, leaf_scale: S_MAX - dag.grid.level, bricks: dag.leaves == Leaves::Bricks };
+    let nodes = DagNodes {
+        words: &dag.words,
+        root: root.word,
+        leaf_scale: S_MAX - dag.grid.level,
+        bricks: dag.leaves == Leaves::Bricks,
+    };
     let oray = dag.grid.to_octree_space(ray);
     let r = OctreeRay::from_octree_space(&oray);
     // Only the box the leaves occupy can hold a hit (exact, as in `cpu::esvo`).
-    let (enter, exit) = r.box_span(dag.occupied[0], dag.occupied[1]);
+    let (enter, exit) = r.box_span(root.occupied[0], root.occupied[1]);
     let h = cast(&nodes, &oray, &r, t_min.max(enter), t_max.min(exit), CastOptions::default(), None, stats)?;
     Some(Hit { t: h.t, normal: face_normal(&oray, &h), prim: morton::encode(h.coords) })
 }
 
 impl Traverse for Svdag {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        trace(self, self.root, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        trace(self, self.root, ray, t_min, t_max, counters)
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
-        Some(crate::gpu::voxel::svdag(self))
+        Some(crate::gpu::voxel::svdag(self, self.root))
+    }
+}
+
+/// A temporal SVDAG as one structure: its first frame.
+impl Traverse for TemporalSvdag {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        TemporalSvdag::frame(self, 0).intersect(ray, t_min, t_max)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        TemporalSvdag::frame(self, 0).intersect_counted(ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::svdag(&self.dag, self.roots[0]))
+    }
+
+    fn frame_count(&self) -> usize {
+        self.roots.len()
+    }
+
+    fn frame(&self, frame: usize) -> Option<Box<dyn Traverse + '_>> {
+        Some(Box::new(TemporalSvdag::frame(self, frame)))
+    }
+}
+
+/// One frame of a temporal SVDAG: the same caster, from that frame's root.
+impl Traverse for Frame<'_> {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        trace(self.dag, self.root, ray, t_min, t_max, &mut NoStats)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        trace(self.dag, self.root, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::voxel::svdag(self.dag, self.root))
     }
 }

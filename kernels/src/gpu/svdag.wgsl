@@ -5,13 +5,16 @@
 // brick, a 2×2×2 group's node register is its 8-bit voxel mask itself. Positions come from the
 // traversal path only (seed 001 §2.3).
 //
-// Buffers: `params` (words 0–4 the voxel grid, see octree_ray.wgsl; then SVDAG_* below) and
+// Buffers: `params` (words 0–4 the voxel grid, see octree_ray.wgsl; then SVDAG_* below: flags,
+// the occupied box, the root) and
 // `words`, the structure's words, uploaded as built.
 
 // Bit 0: non-empty; bit 1: brick leaves.
 const SVDAG_FLAGS: u32 = 5u;
 // The box the leaves occupy (Svdag::occupied), octree space, f32 bits: lo xyz, then hi xyz.
 const SVDAG_OCCUPIED: u32 = 6u;
+// Word index of the root the cast starts from (a temporal SVDAG's frame; 0 for a plain DAG).
+const SVDAG_ROOT: u32 = 12u;
 
 fn svdag_bricks() -> bool {
     return (params(SVDAG_FLAGS) & 2u) != 0u;
@@ -26,7 +29,7 @@ fn brick_byte(node: u32, c: u32) -> u32 {
 }
 
 fn node_root() -> u32 {
-    return 0u;
+    return params(SVDAG_ROOT);
 }
 
 fn node_fetch(node: u32, scale: u32) -> vec2<u32> {

@@ -11,7 +11,7 @@ use std::borrow::Cow;
 
 use scenes::Camera;
 use structures::esvo::Esvo;
-use structures::svdag::{Leaves, Svdag};
+use structures::svdag::{Leaves, Root, Svdag};
 use structures::svo::Svo;
 use structures::svo_naive::SvoNaive;
 use structures::voxel::VoxelGrid;
@@ -88,12 +88,14 @@ pub fn esvo<'a>(esvo: &'a Esvo, camera: &Camera) -> GpuProgram<'a> {
     }
 }
 
-/// The SVDAG's words as built; `params` adds the leaf encoding and the occupied box.
-pub fn svdag(dag: &Svdag) -> GpuProgram<'_> {
+/// The SVDAG's words as built; `params` adds the leaf encoding, the occupied box and the root the
+/// cast starts from (a temporal SVDAG's frame).
+pub fn svdag(dag: &Svdag, root: Root) -> GpuProgram<'_> {
     let flags = u32::from(!dag.is_empty()) | u32::from(dag.leaves == Leaves::Bricks) << 1;
     let mut p = grid_words(&dag.grid);
     p.push(flags);
-    p.extend(dag.occupied.iter().flat_map(|c| c.to_array().map(f32::to_bits)));
+    p.extend(root.occupied.iter().flat_map(|c| c.to_array().map(f32::to_bits)));
+    p.push(root.word);
     GpuProgram {
         label: "svdag",
         wgsl: SVDAG_WGSL,

@@ -15,6 +15,7 @@
 pub mod build;
 pub mod layout;
 pub mod reduce;
+pub mod temporal;
 pub mod validate;
 
 #[cfg(test)]
@@ -94,6 +95,16 @@ pub struct SvdagStats {
     pub reduce_voxels_per_s: f64,
 }
 
+/// Where a traversal starts: a root node, and the box the leaves below it occupy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Root {
+    /// Word index of the root node.
+    pub word: u32,
+    /// The box the root's leaves' parents occupy, in octree space (world-oriented): the caster
+    /// clips each ray to it, as ESVO's does (exact: no voxel lies outside it).
+    pub occupied: [Vec3; 2],
+}
+
 /// The built DAG: the words the kernels read, and what describes them.
 #[derive(Clone, Debug)]
 pub struct Svdag {
@@ -103,9 +114,9 @@ pub struct Svdag {
     pub words: Vec<u32>,
     /// Word index of each level's first node, root first, and one past the end.
     pub level_starts: Vec<u32>,
-    /// The box the leaves' parents occupy, in octree space (world-oriented): the caster clips
-    /// each ray to it, as ESVO's does (exact: no voxel lies outside it).
-    pub occupied: [Vec3; 2],
+    /// Where the caster starts: word 0 and the box all leaves occupy. (A temporal SVDAG has a
+    /// root per frame, see [`temporal`]; this is its first frame's.)
+    pub root: Root,
     /// Leaf voxels.
     pub voxels: u64,
     pub stats: SvdagStats,

@@ -43,6 +43,9 @@ pub struct LevelStore {
     pub unique: u64,
     /// Nodes met (before merging): the SVO's node count at this level.
     pub raw: u64,
+    /// Whether equal nodes are merged. A temporal DAG's root level keeps one root per frame,
+    /// equal or not (seed 001 §4 step 3: "即使当序列中的两个 SVO 完全相同时,仍然保留根节点不被合并").
+    merge: bool,
 }
 
 /// The fewest nodes a parallel run of [`LevelStore::intern_all`] takes: below this, splitting
@@ -60,7 +63,12 @@ fn hash(key: &[u32]) -> u64 {
 
 impl LevelStore {
     pub fn new(kind: NodeKind) -> Self {
-        Self { kind, words: Vec::new(), table: HashTable::new(), unique: 0, raw: 0 }
+        Self { kind, words: Vec::new(), table: HashTable::new(), unique: 0, raw: 0, merge: true }
+    }
+
+    /// A level whose nodes are appended as met, never merged (a temporal DAG's frame roots).
+    pub fn unmerged(kind: NodeKind) -> Self {
+        Self { merge: false, ..Self::new(kind) }
     }
 
     /// The word offset of the unique node equal to `key` (a node's words), adding it if new.
@@ -74,6 +82,12 @@ impl LevelStore {
     /// node into the global DAG).
     #[inline]
     fn intern_merged(&mut self, key: &[u32]) -> u32 {
+        if !self.merge {
+            let offset = self.words.len() as u32;
+            self.words.extend_from_slice(key);
+            self.unique += 1;
+            return offset;
+        }
         let h = hash(key);
         let words = &self.words;
         let kind = self.kind;
@@ -179,6 +193,14 @@ impl Dag {
         Self { leaves, level, top, levels }
     }
 
+    /// A whole DAG whose root level keeps every root it is given, in order, unmerged: one per
+    /// frame of a temporal SVDAG (seed 001 §4).
+    pub fn with_unmerged_roots(leaves: Leaves, level: u32) -> Self {
+        let mut dag = Self::new(leaves, level, 0);
+        dag.levels[0] = LevelStore::unmerged(dag.levels[0].kind);
+        dag
+    }
+
     pub fn bottom(&self) -> u32 {
         self.leaves.bottom_level(self.level)
     }
@@ -192,31 +214,44 @@ impl Dag {
     /// `sub.top`. Each of `sub`'s unique nodes is interned once, bottom-up, its pointers first
     /// translated to this DAG's offsets; `sub`'s nodes before merging are added to the raw counts.
     pub fn absorb(&mut self, sub: &Dag, sub_root: u32) -> u32 {
-        debug_assert!(sub.leaves == self.leaves && sub.level == self.level && sub.top >= self.top);
-        // below[o]: this DAG's offset of the node at offset o of sub's level below.
-        let mut below: Vec<u32> = Vec::new();
+        self.absorb_all(&[(sub, sub_root)])[0]
+    }
+
+    /// Merges several DAGs of the same top level at once, level by level from the bottom: each
+    /// level's nodes of every DAG, in the order given, before the level above (seed 001 §4, the
+    /// per-level lists of Fig. 10). Returns each root's offset here. Interning the DAGs one after
+    /// the other ([`Self::absorb`] each in turn) meets every level's nodes in the same order, so
+    /// both give the same words.
+    pub fn absorb_all(&mut self, subs: &[(&Dag, u32)]) -> Vec<u32> {
+        let Some(&(first, _)) = subs.first() else { return Vec::new() };
+        debug_assert!(subs.iter().all(|(s, _)| s.leaves == self.leaves && s.level == self.level && s.top == first.top));
+        debug_assert!(first.top >= self.top);
+        // below[k][o]: this DAG's offset of the node at offset o of DAG k's level below.
+        let mut below: Vec<Vec<u32>> = vec![Vec::new(); subs.len()];
         let mut key = [0u32; 9];
-        for l in (sub.top..=sub.bottom()).rev() {
-            let local = &sub.levels[(l - sub.top) as usize];
+        for l in (first.top..=first.bottom()).rev() {
             let global = &mut self.levels[(l - self.top) as usize];
-            global.raw += local.raw;
-            let mut remap = vec![u32::MAX; local.words.len()];
-            let mut o = 0;
-            while o < local.words.len() {
-                let node = local.node(o);
-                let key = &mut key[..node.len()];
-                key.copy_from_slice(node);
-                if local.kind == NodeKind::Interior {
-                    for p in &mut key[1..] {
-                        *p = below[*p as usize];
+            for ((sub, _), below) in subs.iter().zip(&mut below) {
+                let local = &sub.levels[(l - sub.top) as usize];
+                global.raw += local.raw;
+                let mut remap = vec![u32::MAX; local.words.len()];
+                let mut o = 0;
+                while o < local.words.len() {
+                    let node = local.node(o);
+                    let key = &mut key[..node.len()];
+                    key.copy_from_slice(node);
+                    if local.kind == NodeKind::Interior {
+                        for p in &mut key[1..] {
+                            *p = below[*p as usize];
+                        }
                     }
+                    remap[o] = global.intern_merged(key);
+                    o += node.len();
                 }
-                remap[o] = global.intern_merged(key);
-                o += node.len();
+                *below = remap;
             }
-            below = remap;
         }
-        below[sub_root as usize]
+        subs.iter().zip(&below).map(|((_, root), below)| below[*root as usize]).collect()
     }
 
     /// The literal bottom-up conversion of seed 001 §2.2 over the canonical octree's level arrays:

@@ -11,6 +11,12 @@ use crate::voxel::morton;
 
 /// The structural checks above; `Err` says what is wrong and where.
 pub fn validate(dag: &Svdag) -> Result<(), String> {
+    validate_with_roots(dag, &[0])
+}
+
+/// [`validate`] for a DAG whose root level holds `roots` (word indices, in order): a temporal
+/// SVDAG's frames, which may repeat a root (roots are never merged).
+pub fn validate_with_roots(dag: &Svdag, roots: &[u32]) -> Result<(), String> {
     let w = &dag.words;
     let levels = dag.level_starts.len() - 1;
     if w.is_empty() {
@@ -40,7 +46,7 @@ pub fn validate(dag: &Svdag) -> Result<(), String> {
             if empty {
                 return Err(format!("level {l}: node at word {o} has an empty or malformed mask {:#x}", node[0]));
             }
-            if !seen.insert(node) {
+            if !seen.insert(node) && l > 0 {
                 return Err(format!("level {l}: node at word {o} duplicates another node: the DAG is not minimal"));
             }
             nodes.push(o as u32);
@@ -51,8 +57,8 @@ pub fn validate(dag: &Svdag) -> Result<(), String> {
         }
         starts.push(nodes);
     }
-    if starts[0] != [0] {
-        return Err(format!("level 0 holds {} nodes, not just the root", starts[0].len()));
+    if starts[0] != roots {
+        return Err(format!("level 0 holds the nodes at {:?}, not the roots {roots:?}", starts[0]));
     }
     // Pointers: onto node starts of the next level, and every such node pointed at.
     for l in 0..levels - 1 {
@@ -82,9 +88,14 @@ pub fn validate(dag: &Svdag) -> Result<(), String> {
 /// Every voxel the DAG stands for, as Morton codes at level `L`, in increasing order (a
 /// depth-first walk in slot order is Morton order).
 pub fn expand(dag: &Svdag) -> Vec<u64> {
+    expand_from(dag, dag.root.word)
+}
+
+/// [`expand`] from the root at word `root` (a temporal SVDAG's frame).
+pub fn expand_from(dag: &Svdag, root: u32) -> Vec<u64> {
     let mut out = Vec::new();
     if !dag.is_empty() {
-        expand_node(dag, 0, 0, 0, &mut out);
+        expand_node(dag, root, 0, 0, &mut out);
     }
     out
 }
@@ -119,7 +130,7 @@ pub fn contains(dag: &Svdag, c: [u32; 3]) -> bool {
     let code = morton::encode(c);
     let slot_at = |l: u32| (code >> (3 * (level - 1 - l))) as u32 & 7;
     let w = &dag.words;
-    let mut node = 0u32;
+    let mut node = dag.root.word;
     for l in 0..dag.bottom_level() {
         let mask = w[node as usize];
         let slot = slot_at(l);

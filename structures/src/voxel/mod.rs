@@ -20,7 +20,10 @@ use glam::{DVec3, Vec3};
 use scenes::{Aabb, Ray};
 
 pub use octree::{Octree, OctreeBuilder, OctreeLevel};
-pub use voxelize::{MAX_VOXELIZE_LEVEL, VoxelizeStats, triangle_overlaps_box, voxelize, voxelize_all};
+pub use voxelize::{
+    MAX_VOXELIZE_LEVEL, VoxelizeStats, touched_subcubes, triangle_overlaps_box, voxelize, voxelize_all,
+    voxelize_subcubes,
+};
 
 /// The deepest level a voxel code can address: 3·21 = 63 bits of a `u64`.
 pub const MAX_LEVEL: u32 = 21;
@@ -155,6 +158,14 @@ impl CodeBounds {
 
     pub fn is_empty(&self) -> bool {
         self.lo[0] > self.hi[0]
+    }
+
+    /// The bounds of both sets of codes.
+    pub fn union(&self, other: &Self) -> Self {
+        Self {
+            lo: std::array::from_fn(|a| self.lo[a].min(other.lo[a])),
+            hi: std::array::from_fn(|a| self.hi[a].max(other.hi[a])),
+        }
     }
 
     /// The box in octree space (`[1, 2]³`, world-oriented) of the added codes, taken as voxels of

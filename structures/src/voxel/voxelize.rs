@@ -97,6 +97,46 @@ pub fn triangle_overlaps_box(tri: &[Vec3; 3], center: Vec3, half: Vec3) -> bool 
 pub fn voxelize<E: Send>(
     scene: &Scene,
     grid: &VoxelGrid,
+    on_chunk: impl FnMut(VoxelChunk) -> Result<(), E> + Send,
+) -> Result<VoxelizeStats, E> {
+    voxelize_filtered(scene, grid, None, on_chunk)
+}
+
+/// [`voxelize`] restricted to the sub-cubes `only` (Morton codes at [`super::subcube_level`],
+/// increasing): their chunks are exactly the ones [`voxelize`] streams for them, and no other
+/// sub-cube is voxelised. A temporal SVDAG re-voxelises only the sub-cubes a frame changed.
+pub fn voxelize_subcubes<E: Send>(
+    scene: &Scene,
+    grid: &VoxelGrid,
+    only: &[u32],
+    on_chunk: impl FnMut(VoxelChunk) -> Result<(), E> + Send,
+) -> Result<VoxelizeStats, E> {
+    debug_assert!(only.is_sorted());
+    voxelize_filtered(scene, grid, Some(only), on_chunk)
+}
+
+/// The sub-cubes (Morton codes at [`super::subcube_level`], increasing, each once) the voxeliser
+/// lists any of `mesh`'s `triangles` under: a superset of the sub-cubes those triangles set voxels
+/// in, by the binning [`voxelize`] itself uses.
+pub fn touched_subcubes(mesh: &Mesh, grid: &VoxelGrid, triangles: &[u32]) -> Vec<u32> {
+    let v = Voxelizer::new(mesh, grid);
+    let mut out: Vec<u32> = triangles
+        .par_iter()
+        .fold(Vec::new, |mut acc, &t| {
+            v.for_each_subcube(t as usize, &mut |s| acc.push(s as u32));
+            acc
+        })
+        .flatten()
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+fn voxelize_filtered<E: Send>(
+    scene: &Scene,
+    grid: &VoxelGrid,
+    only: Option<&[u32]>,
     mut on_chunk: impl FnMut(VoxelChunk) -> Result<(), E> + Send,
 ) -> Result<VoxelizeStats, E> {
     assert!(grid.level <= MAX_VOXELIZE_LEVEL, "voxelize: level {} is over {MAX_VOXELIZE_LEVEL}", grid.level);
@@ -104,7 +144,10 @@ pub fn voxelize<E: Send>(
     let v = Voxelizer::new(&scene.mesh, grid);
     let bins = v.bin();
     let mut stats = VoxelizeStats { subcube_level: v.subcube_level, ..VoxelizeStats::default() };
-    let nonempty = bins.nonempty();
+    let mut nonempty = bins.nonempty();
+    if let Some(only) = only {
+        nonempty.retain(|s| only.binary_search(s).is_ok());
+    }
     stats.subcubes = nonempty.len() as u64;
     let window = WINDOW_PER_THREAD * rayon::current_num_threads().max(1);
     let process = |group: &[u32]| -> Vec<SubcubeOutput> {
@@ -211,16 +254,19 @@ impl<'a> Voxelizer<'a> {
         Some(range)
     }
 
+    /// Visits the Morton code of every sub-cube triangle `t` is binned under.
+    fn for_each_subcube(&self, t: usize, visit: &mut dyn FnMut(usize)) {
+        let side = (1u64 << self.side_bits) as f64;
+        let tri = self.grid_triangle(t);
+        let Some(range) = self.voxel_range(&tri) else { return };
+        let range = range.map(|[lo, hi]| [lo >> self.side_bits, hi >> self.side_bits]);
+        for_each_cell(&tri, range, side, self.margin, |c| visit(morton::encode(c.map(|x| x as u32)) as usize));
+    }
+
     /// Phase 1: count, prefix sum, fill.
     fn bin(&self) -> Bins {
         let n = 1usize << (3 * self.subcube_level);
-        let side = (1u64 << self.side_bits) as f64;
-        let for_each_subcube = |t: usize, visit: &mut dyn FnMut(usize)| {
-            let tri = self.grid_triangle(t);
-            let Some(range) = self.voxel_range(&tri) else { return };
-            let range = range.map(|[lo, hi]| [lo >> self.side_bits, hi >> self.side_bits]);
-            for_each_cell(&tri, range, side, self.margin, |c| visit(morton::encode(c.map(|x| x as u32)) as usize));
-        };
+        let for_each_subcube = |t: usize, visit: &mut dyn FnMut(usize)| self.for_each_subcube(t, visit);
         // Count. `ends[s]` ends up as the end of sub-cube s's list (its start is `ends[s - 1]`).
         let mut ends: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
         (0..self.mesh.triangle_count()).into_par_iter().for_each(|t| {
