@@ -12,6 +12,7 @@ pub mod octree_ray;
 pub mod render;
 pub mod slab;
 pub mod svdag;
+pub mod svdag_shadow;
 pub mod svo;
 pub mod svo_naive;
 pub mod triangle;

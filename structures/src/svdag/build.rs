@@ -19,7 +19,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use scenes::Scene;
 
-use super::layout::{NodeKind, node_words};
+use super::layout::node_words;
 use super::reduce::{Dag, Stream};
 use super::{Root, Source, Svdag, SvdagParams, SvdagStats};
 use crate::BuildError;
@@ -295,11 +295,11 @@ pub(crate) fn lay_out(mut dag: Dag) -> Result<(Vec<u32>, Vec<u32>), BuildError> 
         let first = words.len();
         words.append(&mut level.words);
         level.words = Vec::new();
-        if level.kind == NodeKind::Interior {
+        if level.kind.has_pointers() {
             let base = starts[i + 1];
             let mut o = first;
             while o < words.len() {
-                let n = node_words(NodeKind::Interior, words[o]);
+                let n = node_words(level.kind, words[o]);
                 for p in &mut words[o + 1..o + n] {
                     *p += base;
                 }

@@ -23,6 +23,9 @@
 pub const CHILD_MASK_BITS: u32 = 8;
 /// The child mask of a node's first word.
 pub const CHILD_MASK: u32 = (1 << CHILD_MASK_BITS) - 1;
+/// The high bit of each 2-bit child code of a shadow node's 16-bit mask: set for a mixed child
+/// (code 2), the only code with a pointer (see [`super::shadow`]).
+pub const SHADOW_MIXED_BITS: u32 = 0xaaaa;
 /// Words of a leaf brick (a 64-bit voxel mask).
 pub const BRICK_WORDS: usize = 2;
 /// A brick is 4 voxels wide: it spans two levels below its node.
@@ -75,6 +78,7 @@ pub fn pointer_index(node: u32, mask: u32, slot: u32) -> u32 {
 pub fn node_words(kind: NodeKind, first: u32) -> usize {
     match kind {
         NodeKind::Interior => 1 + (first & CHILD_MASK).count_ones() as usize,
+        NodeKind::Shadow => 1 + (first & SHADOW_MIXED_BITS).count_ones() as usize,
         NodeKind::Mask => 1,
         NodeKind::Brick => BRICK_WORDS,
     }
@@ -85,13 +89,22 @@ pub fn node_words(kind: NodeKind, first: u32) -> usize {
 pub enum NodeKind {
     /// A mask word and one pointer per child.
     Interior,
-    /// A mask word alone (`bits` bottom level).
+    /// A mask word alone (`bits` bottom level; a shadow DAG's bottom level, see
+    /// [`super::shadow`]).
     Mask,
+    /// A shadow DAG's interior node: 2 bits per child (shadow, lit, mixed) and one pointer per
+    /// mixed child.
+    Shadow,
     /// A 64-bit voxel brick (`bricks` bottom level).
     Brick,
 }
 
 impl NodeKind {
+    /// Whether nodes of this kind hold pointers to the level below (after their first word).
+    pub fn has_pointers(self) -> bool {
+        matches!(self, NodeKind::Interior | NodeKind::Shadow)
+    }
+
     /// The kind of level `l`'s nodes in a DAG whose bottom level is `bottom`.
     pub fn of_level(leaves: Leaves, l: u32, bottom: u32) -> Self {
         match (l == bottom, leaves) {

@@ -15,6 +15,7 @@
 pub mod build;
 pub mod layout;
 pub mod reduce;
+pub mod shadow;
 pub mod temporal;
 pub mod validate;
 

@@ -193,6 +193,20 @@ impl Dag {
         Self { leaves, level, top, levels }
     }
 
+    /// A shadow DAG (see [`super::shadow`]) from level `top` down: 2-bit-per-child interior
+    /// nodes with a pointer per mixed child, and 16-bit mask words (one bit used per voxel)
+    /// at the bottom level `L − 1`.
+    pub fn shadow(level: u32, top: u32) -> Self {
+        let mut dag = Self::new(Leaves::Bits, level, top);
+        let bottom = dag.bottom();
+        for (l, store) in (top..).zip(&mut dag.levels) {
+            if l != bottom {
+                *store = LevelStore::new(NodeKind::Shadow);
+            }
+        }
+        dag
+    }
+
     /// A whole DAG whose root level keeps every root it is given, in order, unmerged: one per
     /// frame of a temporal SVDAG (seed 001 §4).
     pub fn with_unmerged_roots(leaves: Leaves, level: u32) -> Self {
@@ -240,7 +254,7 @@ impl Dag {
                     let node = local.node(o);
                     let key = &mut key[..node.len()];
                     key.copy_from_slice(node);
-                    if local.kind == NodeKind::Interior {
+                    if local.kind.has_pointers() {
                         for p in &mut key[1..] {
                             *p = below[*p as usize];
                         }
