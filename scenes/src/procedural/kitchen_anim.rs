@@ -6,11 +6,24 @@
 //! the same in every frame — and for per-frame rebuilds the wasteful one.
 //!
 //! The room is one box wound inwards (as in `room`), `[-HALF_X, HALF_X] × [0, HEIGHT] ×
-//! [-HALF_Z, HALF_Z]`; everything else is a closed object inside it, kept off its walls, floor and
-//! ceiling, so the room alone fixes the bounds. Along the back wall stand cabinets, a countertop,
-//! a stove with a pot, a fridge, and wall shelves with jars, cans and bowls; a table with a vase and
-//! cups stands in the middle with four chairs, a rug lies between the table and the fridge, a plant
-//! and a bin stand in two corners. The sizes, the shelf clutter and the chairs' placement come from the seed.
+//! [-HALF_Z, HALF_Z]`; everything else is a closed object inside it, kept at least a millimetre off
+//! its walls and ceiling (things may stand on the floor), so the room alone fixes the bounds. The
+//! static kitchen is detailed, like BART's (~110k triangles of furniture and items), so that the
+//! moving objects are a small part of the voxels as well as of the triangles:
+//! - along the back wall: panelled cabinets with drawers and bar handles under a countertop
+//!   ([`cabinets`]) crowded with appliances, tools and food ([`counter`]), a sink and dish rack
+//!   ([`sink`]), a stove with knobs, burners, grates, a pot and a pan under a hood ([`stove`]), a
+//!   fridge with notes and magnets ([`fridge`]), wall shelves and a pantry rack full of jars, cans,
+//!   bowls, cups, bottles, books, plates and spices ([`shelves`]);
+//! - in the middle: a table with turned legs, laid for four, a vase of flowers, and four slatted
+//!   chairs ([`table`]);
+//! - on the left wall: a dresser with plates and hanging cups ([`dresser`]), a window with
+//!   curtains; pendant lamps, a clock, a fringed rug and a bin ([`fittings`]); plants with
+//!   hundreds of leaves in a corner, by the window and on its sill ([`plants`]).
+//!
+//! Sizes, turns about the vertical (at any angle), tilts and places come from the seed, so no two
+//! items are the same voxels: a voxel DAG merges identical grid-aligned copies (seed 001 §4), and
+//! a real kitchen's clutter has none.
 //!
 //! The moving objects ([`MOVING`]), each on a closed-form, bounded path:
 //! - `ball`: rolls a circle on the rug (turned by distance over radius, so it does not slide);
@@ -19,15 +32,25 @@
 //! - `fan`: the ceiling fan's rotor (hub and four pitched blades) turning above the table;
 //! - `drawer`: a counter drawer sliding out and back in.
 
-use std::f32::consts::{FRAC_PI_2, PI, TAU};
+use std::f32::consts::{FRAC_PI_2, TAU};
 
-use glam::{Mat4, Quat, Vec2, Vec3, Vec3Swizzles};
+use glam::{Mat4, Quat, Vec2, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use super::shapes::{
-    SceneBuilder, box_between, cylinder_profile, push_box, push_lathe, sphere_profile, vessel_profile,
-};
+mod cabinets;
+mod counter;
+mod dresser;
+mod fittings;
+mod fridge;
+mod parts;
+mod plants;
+mod shelves;
+mod sink;
+mod stove;
+mod table;
+
+use super::shapes::{SceneBuilder, box_between, cylinder_profile, push_box, push_lathe, sphere_profile};
 use crate::camera::CameraSpec;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -49,6 +72,9 @@ const DRAWER_UNIT: u32 = 2;
 const DEPTH: f32 = 0.6;
 const FRONT: f32 = -HALF_Z + DEPTH;
 const COUNTER_TOP: f32 = 0.9;
+/// Where things standing against the back wall end: 2 mm off it, so no rounding in a transform
+/// puts a vertex on or through the wall (the room alone fixes the bounds).
+const BACK: f32 = -HALF_Z + 0.002;
 /// The drawer's slot: below the countertop, above the drawer unit's cupboard.
 const DRAWER_Y: (f32, f32) = (0.68, 0.84);
 /// How far the drawer slides out at most.
@@ -117,36 +143,46 @@ pub(super) fn generate(seed: u64, time: f32) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     // The motion first, then the furniture: one fixed order of draws, whatever the time.
     let motion = Motion::draw(&mut rng);
+    let rng = &mut rng;
     let mut builder = SceneBuilder::new();
     let room = box_between(Vec3::new(-HALF_X, 0.0, -HALF_Z), Vec3::new(HALF_X, HEIGHT, HALF_Z));
     builder.object("room", true, |mesh| push_box(mesh, room, true));
-    builder.object("cabinets", true, cabinets);
+    builder.object("cabinets", true, |mesh| cabinets::cabinets(mesh, rng));
     builder.object("countertop", true, |mesh| {
         let overhang = 0.03;
         push_box(
             mesh,
-            box_between(Vec3::new(COUNTER_X.0, 0.86, -HALF_Z), Vec3::new(COUNTER_X.1, COUNTER_TOP, FRONT + overhang)),
+            box_between(
+                Vec3::new(COUNTER_X.0 + 0.002, 0.86, BACK),
+                Vec3::new(COUNTER_X.1, COUNTER_TOP, FRONT + overhang),
+            ),
             false,
         );
     });
-    builder.object("stove", true, stove);
-    builder.object("fridge", true, fridge);
-    builder.object("shelves", true, shelves);
-    builder.object("shelf-items", true, |mesh| shelf_items(mesh, &mut rng));
-    builder.object("counter-items", true, |mesh| counter_items(mesh, &mut rng));
-    builder.object("table", true, table);
+    builder.object("stove", true, |mesh| stove::stove(mesh, rng));
+    builder.object("hood", true, stove::hood);
+    builder.object("fridge", true, fridge::fridge);
+    builder.object("shelves", true, shelves::shelves);
+    builder.object("pantry", true, shelves::pantry);
+    builder.object("dresser", true, |mesh| dresser::dresser(mesh, rng));
+    builder.object("table", true, table::table);
     for k in 0..4 {
-        builder.object(&format!("chair-{k}"), true, |mesh| chair(mesh, k, &mut rng));
+        builder.object(&format!("chair-{k}"), true, |mesh| table::chair(mesh, k, rng));
     }
-    builder.object("table-items", true, |mesh| table_items(mesh, &mut rng));
-    builder.object("rug", true, |mesh| {
-        push_box(
-            mesh,
-            box_between(Vec3::new(RUG_MIN.x, 0.0, RUG_MIN.y), Vec3::new(RUG_MAX.x, RUG_TOP, RUG_MAX.y)),
-            false,
-        );
-    });
-    builder.object("corner-items", true, |mesh| corner_items(mesh, &mut rng));
+    builder.object("shelf-items", true, |mesh| shelves::shelf_items(mesh, rng));
+    builder.object("pantry-items", true, |mesh| shelves::pantry_items(mesh, rng));
+    builder.object("counter-items", true, |mesh| counter::counter_items(mesh, rng));
+    builder.object("sink", true, |mesh| sink::sink(mesh, rng));
+    builder.object("stove-items", true, |mesh| stove::stove_items(mesh, rng));
+    builder.object("fridge-items", true, |mesh| fridge::fridge_items(mesh, rng));
+    builder.object("table-items", true, |mesh| table::table_items(mesh, rng));
+    builder.object("window", true, fittings::window);
+    builder.object("curtains", true, |mesh| fittings::curtains(mesh, rng));
+    builder.object("lamps", true, |mesh| fittings::lamps(mesh, rng));
+    builder.object("clock", true, |mesh| fittings::clock(mesh, rng));
+    builder.object("rug", true, |mesh| fittings::rug(mesh, rng));
+    builder.object("bin", true, fittings::bin);
+    builder.object("plants", true, |mesh| plants::plants(mesh, rng));
     builder.object("fan-mount", true, fan_mount);
     // The moving objects, each a function of the time alone.
     builder.object("ball", true, |mesh| ball(mesh, &motion, time));
@@ -156,15 +192,17 @@ pub(super) fn generate(seed: u64, time: f32) -> Scene {
     builder.object("drawer", true, |mesh| drawer(mesh, &motion, time));
     let light = Vec3::new(0.9, HEIGHT - 0.25, -0.2);
     let camera = CameraSpec {
-        eye: Vec3::new(HALF_X - 0.3, 1.9, HALF_Z - 0.2),
-        target: Vec3::new(-0.7, 0.8, -0.6),
+        eye: Vec3::new(HALF_X - 0.25, 1.85, HALF_Z - 0.2),
+        target: Vec3::new(-0.5, 0.85, -0.9),
         up: Vec3::Y,
-        vfov_deg: 65.0,
+        vfov_deg: 68.0,
     };
     let provenance = format!(
-        "accel-bench procedural::kitchen_anim seed={seed:#x}: inward box room {}x{HEIGHT}x{} with cabinets, \
-         stove, fridge, shelves, table, four chairs and clutter (static), and a rolling ball, a spinning top, \
-         a toy car, a ceiling fan and a sliding drawer (moving), all closed two-manifold",
+        "accel-bench procedural::kitchen_anim seed={seed:#x}: inward box room {}x{HEIGHT}x{} with panelled \
+         cabinets, stove and hood, fridge, shelves and pantry rack full of crockery, jars and books, a sink, a \
+         laid table with four slatted chairs, a window with curtains, pendant lamps, a clock and plants \
+         (static), and a rolling ball, a spinning top, a toy car, a ceiling fan and a sliding drawer (moving), \
+         all closed two-manifold",
         2.0 * HALF_X,
         2.0 * HALF_Z
     );
@@ -175,252 +213,6 @@ pub(super) fn generate(seed: u64, time: f32) -> Scene {
 fn unit_x(unit: u32) -> (f32, f32) {
     let width = (COUNTER_X.1 - COUNTER_X.0) / UNITS as f32;
     (COUNTER_X.0 + unit as f32 * width, COUNTER_X.0 + (unit + 1) as f32 * width)
-}
-
-/// The cabinet units, full height but for the drawer unit's cupboard under the drawer slot, each
-/// with a handle.
-fn cabinets(mesh: &mut Mesh) {
-    for unit in 0..UNITS {
-        let (x0, x1) = unit_x(unit);
-        let top = if unit == DRAWER_UNIT { DRAWER_Y.0 - 0.02 } else { 0.86 };
-        push_box(mesh, box_between(Vec3::new(x0 + 0.005, 0.0, -HALF_Z), Vec3::new(x1 - 0.005, top, FRONT)), false);
-        let handle = Vec3::new(0.5 * (x0 + x1), top - 0.08, FRONT + 0.012);
-        push_box(
-            mesh,
-            Mat4::from_scale_rotation_translation(Vec3::new(0.14, 0.015, 0.024), Quat::IDENTITY, handle),
-            false,
-        );
-    }
-}
-
-/// The oven under four burners and four knobs, and a pot on one burner.
-fn stove(mesh: &mut Mesh) {
-    let (x0, x1) = (COUNTER_X.1 + 0.05, COUNTER_X.1 + 0.85);
-    push_box(mesh, box_between(Vec3::new(x0, 0.0, -HALF_Z), Vec3::new(x1, COUNTER_TOP, FRONT)), false);
-    let centre = Vec2::new(0.5 * (x0 + x1), -HALF_Z + 0.5 * DEPTH);
-    let burners = [Vec2::new(-0.19, -0.14), Vec2::new(0.19, -0.14), Vec2::new(-0.19, 0.14), Vec2::new(0.19, 0.14)];
-    for (k, offset) in burners.into_iter().enumerate() {
-        let at = centre + offset;
-        let burner = Mat4::from_translation(Vec3::new(at.x, COUNTER_TOP, at.y));
-        push_lathe(mesh, &cylinder_profile(0.085, 0.012), SLICES, false, burner);
-        // Knobs on the front face: cylinders turned so their axis (+y) points out (+z).
-        let knob = Mat4::from_translation(Vec3::new(x0 + 0.16 + 0.16 * k as f32, 0.8, FRONT))
-            * Mat4::from_rotation_x(FRAC_PI_2);
-        push_lathe(mesh, &cylinder_profile(0.022, 0.025), SLICES / 2, false, knob);
-    }
-    let pot = [Vec2::new(0.11, 0.15), Vec2::new(0.11, 0.015), Vec2::new(0.1, 0.0)];
-    let on_burner = centre + burners[0];
-    let pot_at = Mat4::from_translation(Vec3::new(on_burner.x, COUNTER_TOP + 0.012, on_burner.y));
-    push_lathe(mesh, &vessel_profile(&pot, 0.006), SLICES, false, pot_at);
-}
-
-/// The fridge beside the stove, with a door handle.
-fn fridge(mesh: &mut Mesh) {
-    let (x0, x1) = (COUNTER_X.1 + 0.95, COUNTER_X.1 + 1.85);
-    let front = -HALF_Z + 0.7;
-    push_box(mesh, box_between(Vec3::new(x0, 0.0, -HALF_Z), Vec3::new(x1, 1.9, front)), false);
-    push_box(mesh, box_between(Vec3::new(x0 + 0.06, 0.9, front), Vec3::new(x0 + 0.09, 1.6, front + 0.04)), false);
-}
-
-/// The two wall shelves over the left of the counter: `SHELF_Y` boards on brackets.
-const SHELF_Y: [f32; 2] = [1.45, 1.85];
-const SHELF_X: (f32, f32) = (-HALF_X + 0.1, -0.6);
-const SHELF_DEPTH: f32 = 0.28;
-const SHELF_BOARD: f32 = 0.03;
-
-fn shelves(mesh: &mut Mesh) {
-    for y in SHELF_Y {
-        let board =
-            box_between(Vec3::new(SHELF_X.0, y - SHELF_BOARD, -HALF_Z), Vec3::new(SHELF_X.1, y, -HALF_Z + SHELF_DEPTH));
-        push_box(mesh, board, false);
-        for k in 0..3 {
-            let x = SHELF_X.0 + 0.15 + k as f32 * 0.5 * (SHELF_X.1 - SHELF_X.0 - 0.3);
-            let bracket = box_between(
-                Vec3::new(x - 0.015, y - SHELF_BOARD - 0.15, -HALF_Z),
-                Vec3::new(x + 0.015, y - SHELF_BOARD, -HALF_Z + 0.2),
-            );
-            push_box(mesh, bracket, false);
-        }
-    }
-}
-
-/// A jar with a narrower lid, `radius` wide and `height` tall, standing on y = 0.
-fn jar_profile(radius: f32, height: f32) -> Vec<Vec2> {
-    vec![
-        Vec2::new(0.0, height),
-        Vec2::new(0.85 * radius, height),
-        Vec2::new(0.85 * radius, 0.88 * height),
-        Vec2::new(radius, 0.84 * height),
-        Vec2::new(radius, 0.0),
-        Vec2::new(0.0, 0.0),
-    ]
-}
-
-/// A bowl's outer silhouette, rim to foot.
-fn bowl_outline(radius: f32, height: f32) -> [Vec2; 3] {
-    [Vec2::new(radius, height), Vec2::new(0.75 * radius, 0.35 * height), Vec2::new(0.45 * radius, 0.0)]
-}
-
-/// Jars, cans and bowls in a row along each shelf, left to right, until the shelf is full.
-fn shelf_items(mesh: &mut Mesh, rng: &mut Pcg64Mcg) {
-    for y in SHELF_Y {
-        let mut x = SHELF_X.0 + 0.05;
-        loop {
-            let kind = rng.random_range(0..3u32);
-            let radius = if kind == 2 { rng.random_range(0.07..0.1) } else { rng.random_range(0.035..0.065) };
-            let height = rng.random_range(0.09..0.26);
-            if x + 2.0 * radius > SHELF_X.1 - 0.05 {
-                break;
-            }
-            let at = Mat4::from_translation(Vec3::new(x + radius, y, -HALF_Z + 0.5 * SHELF_DEPTH));
-            match kind {
-                0 => push_lathe(mesh, &jar_profile(radius, height), SLICES, false, at),
-                1 => push_lathe(mesh, &cylinder_profile(radius, height), SLICES, false, at),
-                _ => push_lathe(mesh, &vessel_profile(&bowl_outline(radius, 0.5 * height), 0.006), SLICES, false, at),
-            }
-            x += 2.0 * radius + rng.random_range(0.02..0.08);
-        }
-    }
-}
-
-/// A kettle, a fruit bowl with fruit, bottles and a cutting board on the countertop.
-fn counter_items(mesh: &mut Mesh, rng: &mut Pcg64Mcg) {
-    let z = -HALF_Z + 0.32;
-    let kettle = [
-        Vec2::new(0.0, 0.24),
-        Vec2::new(0.02, 0.24),
-        Vec2::new(0.02, 0.22),
-        Vec2::new(0.05, 0.2),
-        Vec2::new(0.09, 0.14),
-        Vec2::new(0.1, 0.06),
-        Vec2::new(0.09, 0.0),
-        Vec2::new(0.0, 0.0),
-    ];
-    let kettle_at = Vec3::new(-2.9, COUNTER_TOP, z);
-    push_lathe(mesh, &kettle, SLICES, false, Mat4::from_translation(kettle_at));
-    push_box(
-        mesh,
-        box_between(kettle_at + Vec3::new(-0.015, 0.2, -0.07), kettle_at + Vec3::new(0.015, 0.27, 0.07)),
-        false,
-    );
-
-    let bowl_at = Vec3::new(-1.7, COUNTER_TOP, z);
-    push_lathe(mesh, &vessel_profile(&bowl_outline(0.16, 0.09), 0.008), SLICES, false, Mat4::from_translation(bowl_at));
-    let fruit = sphere_profile(12);
-    for k in 0..5 {
-        let radius = rng.random_range(0.035..0.045);
-        let angle = TAU * k as f32 / 5.0 + rng.random_range(-0.2..0.2);
-        let at = bowl_at + Vec3::new(0.075 * angle.cos(), 0.035 + radius, 0.075 * angle.sin());
-        let transform = Mat4::from_scale_rotation_translation(Vec3::splat(radius), Quat::IDENTITY, at);
-        push_lathe(mesh, &fruit, 24, false, transform);
-    }
-
-    for k in 0..3 {
-        let height = rng.random_range(0.24..0.32);
-        let bottle = [
-            Vec2::new(0.0, height),
-            Vec2::new(0.012, height),
-            Vec2::new(0.012, 0.78 * height),
-            Vec2::new(0.034, 0.6 * height),
-            Vec2::new(0.034, 0.0),
-            Vec2::new(0.0, 0.0),
-        ];
-        let at = Vec3::new(-0.3 + 0.1 * k as f32, COUNTER_TOP, -HALF_Z + 0.16);
-        push_lathe(mesh, &bottle, SLICES / 2, false, Mat4::from_translation(at));
-    }
-
-    let board = Mat4::from_scale_rotation_translation(
-        Vec3::new(0.36, 0.02, 0.24),
-        Quat::from_rotation_y(rng.random_range(-0.3..0.3)),
-        Vec3::new(-2.3, COUNTER_TOP + 0.01, z),
-    );
-    push_box(mesh, board, false);
-}
-
-/// The table: a top on four legs.
-fn table(mesh: &mut Mesh) {
-    let (lo, hi) = (TABLE.xz() - TABLE_HALF, TABLE.xz() + TABLE_HALF);
-    push_box(mesh, box_between(Vec3::new(lo.x, TABLE_TOP - 0.04, lo.y), Vec3::new(hi.x, TABLE_TOP, hi.y)), false);
-    for (x, z) in [(lo.x, lo.y), (hi.x, lo.y), (lo.x, hi.y), (hi.x, hi.y)] {
-        let inset = Vec2::new((TABLE.x - x).signum(), (TABLE.z - z).signum()) * 0.07;
-        let leg = Vec3::new(x + inset.x, 0.0, z + inset.y);
-        push_box(
-            mesh,
-            box_between(leg - Vec3::new(0.03, 0.0, 0.03), leg + Vec3::new(0.03, TABLE_TOP - 0.04, 0.03)),
-            false,
-        );
-    }
-}
-
-/// Chair `k` of four, two on each long side of the table facing it, a little askew.
-fn chair(mesh: &mut Mesh, k: u32, rng: &mut Pcg64Mcg) {
-    let side = if k < 2 { -1.0 } else { 1.0 };
-    let x = TABLE.x + if k.is_multiple_of(2) { -0.4 } else { 0.4 };
-    let at = Vec3::new(x + rng.random_range(-0.06..0.06), 0.0, TABLE.z + side * rng.random_range(0.68..0.8));
-    // Facing the table: the chair's front (+z local) points to −side.
-    let yaw = if side < 0.0 { 0.0 } else { PI } + rng.random_range(-0.15..0.15);
-    let place = Mat4::from_rotation_translation(Quat::from_rotation_y(yaw), at);
-    let part = |mesh: &mut Mesh, min: Vec3, max: Vec3| push_box(mesh, place * box_between(min, max), false);
-    let (half, seat) = (0.21, 0.45);
-    part(mesh, Vec3::new(-half, seat - 0.04, -half), Vec3::new(half, seat, half));
-    for (sx, sz) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
-        let leg = Vec3::new(sx * (half - 0.03), 0.0, sz * (half - 0.03));
-        part(mesh, leg - Vec3::new(0.02, 0.0, 0.02), leg + Vec3::new(0.02, seat - 0.04, 0.02));
-    }
-    // The back rises from the rear edge (−z local): two posts and a rail.
-    for sx in [-1.0, 1.0] {
-        let post = Vec3::new(sx * (half - 0.03), seat, -half + 0.02);
-        part(mesh, post - Vec3::new(0.02, 0.0, 0.02), post + Vec3::new(0.02, 0.42, 0.02));
-    }
-    part(mesh, Vec3::new(-half, seat + 0.26, -half), Vec3::new(half, seat + 0.42, -half + 0.035));
-}
-
-/// A vase in the middle of the table (inside the car's loop) and two cups at its corners
-/// (outside it).
-fn table_items(mesh: &mut Mesh, rng: &mut Pcg64Mcg) {
-    let height = rng.random_range(0.22..0.3);
-    let belly = rng.random_range(0.055..0.07);
-    let vase = [
-        Vec2::new(0.0, height),
-        Vec2::new(0.03, height),
-        Vec2::new(0.024, 0.85 * height),
-        Vec2::new(0.8 * belly, 0.6 * height),
-        Vec2::new(belly, 0.3 * height),
-        Vec2::new(0.8 * belly, 0.05 * height),
-        Vec2::new(0.7 * belly, 0.0),
-        Vec2::new(0.0, 0.0),
-    ];
-    push_lathe(mesh, &vase, SLICES, false, Mat4::from_translation(TABLE.with_y(TABLE_TOP)));
-    let cup = [Vec2::new(0.04, 0.09), Vec2::new(0.037, 0.03), Vec2::new(0.034, 0.0)];
-    for corner in [Vec2::new(-0.7, -0.36), Vec2::new(0.7, 0.36)] {
-        let at = TABLE.xz() + corner;
-        push_lathe(
-            mesh,
-            &vessel_profile(&cup, 0.004),
-            SLICES,
-            false,
-            Mat4::from_translation(Vec3::new(at.x, TABLE_TOP, at.y)),
-        );
-    }
-}
-
-/// A potted plant in the back right corner and a bin in the front left one.
-fn corner_items(mesh: &mut Mesh, rng: &mut Pcg64Mcg) {
-    let pot = [Vec2::new(0.16, 0.32), Vec2::new(0.12, 0.0)];
-    let pot_at = Vec3::new(HALF_X - 0.3, 0.0, -HALF_Z + 0.3);
-    push_lathe(mesh, &vessel_profile(&pot, 0.015), SLICES, false, Mat4::from_translation(pot_at));
-    let bush = rng.random_range(0.2..0.26);
-    let squash = Vec3::new(bush, 0.8 * bush, bush);
-    let bush_at = Mat4::from_scale_rotation_translation(squash, Quat::IDENTITY, pot_at + Vec3::Y * (0.3 + 0.7 * bush));
-    push_lathe(mesh, &sphere_profile(SLICES / 2), SLICES, false, bush_at);
-    let bin = [Vec2::new(0.15, 0.42), Vec2::new(0.13, 0.0)];
-    push_lathe(
-        mesh,
-        &vessel_profile(&bin, 0.01),
-        SLICES,
-        false,
-        Mat4::from_translation(Vec3::new(-HALF_X + 0.3, 0.0, HALF_Z - 0.3)),
-    );
 }
 
 /// The fan's static part: a canopy under the ceiling and the rod down to the rotor.

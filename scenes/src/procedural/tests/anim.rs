@@ -173,7 +173,8 @@ fn static_objects_stay_put_and_moving_ones_move() {
             100.0 * fraction
         );
         if animation.name == "kitchen-anim" {
-            assert!(fraction < 0.1, "kitchen: {fraction} of the triangles move");
+            // A few small things in a big static kitchen (BART Kitchen: a few percent move).
+            assert!(fraction <= 0.03, "kitchen: {fraction} of the triangles move");
         } else {
             assert!(fraction > 0.5, "{}: only {fraction} of the triangles move", animation.name);
         }
@@ -187,12 +188,9 @@ fn every_frame_validates_and_closed_objects_are_closed_and_wound_outwards() {
             let scene = animation.frame(t);
             scene.mesh.validate(&scene.name).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
             assert_eq!(scene.mesh.degenerate_count(), 0, "{}", scene.name);
-            assert!(
-                (5_000..=40_000).contains(&scene.triangle_count()),
-                "{}: {} triangles",
-                scene.name,
-                scene.triangle_count()
-            );
+            // The kitchen stands in for BART Kitchen's ~110k triangles of detailed furniture.
+            let expected = if animation.name == "kitchen-anim" { 60_000..=120_000 } else { 5_000..=40_000 };
+            assert!(expected.contains(&scene.triangle_count()), "{}: {} triangles", scene.name, scene.triangle_count());
             let mut next = 0;
             for object in &scene.objects {
                 assert_eq!(object.first_triangle, next, "{}: object {} not contiguous", scene.name, object.name);
@@ -221,6 +219,33 @@ fn camera_and_light_are_set_and_the_light_is_inside() {
             // Inside the closed room: nothing but the scene's inside is in view.
             assert!(bounds.contains(camera.eye), "{}: {camera:?}", scene.name);
         }
+    }
+}
+
+#[test]
+fn kitchen_objects_keep_off_the_room_faces() {
+    // Not only the bounds: every object stays a millimetre inside the room, so no rounding in a
+    // transform can push a vertex onto or through a wall, and no object is glued to one.
+    let mut animation = Animation::named("kitchen-anim", DEFAULT_FRAMES).expect("kitchen-anim");
+    // Several seeds: the clutter's sizes and places come from the seed.
+    for (seed, t) in
+        [(animation.seed, 0), (animation.seed, 5), (animation.seed, 1000), (1, 37), (2, 0), (3, 11), (4, 0)]
+    {
+        animation.seed = seed;
+        let scene = animation.frame(t);
+        let room = object_bounds(&scene, object(&scene, "room"));
+        let inside = Aabb::new(room.min + Vec3::splat(1e-3), room.max - Vec3::splat(1e-3));
+        // Things standing on the floor may touch it (y = 0 exactly); nothing else.
+        let floor = Vec3::new(inside.min.x, room.min.y, inside.min.z);
+        let outside: Vec<String> = scene
+            .objects
+            .iter()
+            .filter(|o| o.name != "room")
+            .map(|o| (o, object_bounds(&scene, o)))
+            .filter(|(_, b)| !(b.min.cmpge(floor).all() && inside.contains(b.max)))
+            .map(|(o, b)| format!("{} {b:?}", o.name))
+            .collect();
+        assert!(outside.is_empty(), "{}: {outside:#?}", scene.name);
     }
 }
 
