@@ -186,6 +186,17 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                     let per_frame = svdag_bytes(n, voxels);
                     if all { frames * per_frame } else { 2.0 * per_frame + 64.0 * n }
                 }
+                // Per light face and texel: the two depth maps while rasterised (8 + 4 B) and
+                // read out (2 × 4 B), the slice counts kept (2 × 2 B), one variant's pyramids
+                // (2 × 2 B × 4/3); the DAGs are far smaller. A light inside the scene has six faces.
+                "svdag-shadow" => {
+                    let b = input.scene.bounds().framed();
+                    let light = input.scene.light_position();
+                    let inside = b.min.cmplt(light).all() && light.cmplt(b.max).all();
+                    let faces = if inside { 6.0 } else { 1.0 };
+                    let texels = 4f64.powi(level.min(31) as i32);
+                    faces * texels * 14.0 + texels * 16.0 + 16.0 * 1_048_576.0
+                }
                 // The sub-cube build holds the finished words, one batch of sub-cubes (4 M voxels:
                 // chunks, octrees, contours, ~100 B each) and the triangles' setup, never the
                 // whole octree: the words are 9.5–10.5 B per leaf voxel (compressed attributes; raw
@@ -216,7 +227,10 @@ fn svdag_bytes(triangles: f64, voxels: f64) -> f64 {
 
 /// What to say when a build is refused.
 pub fn build_hint(structure: &str, params: &Params) -> String {
-    match kernels::find_structure(structure).map(|e| e.family) {
+    let family = kernels::find_structure(structure)
+        .map(|e| e.family)
+        .or_else(|| kernels::find_query_structure(structure).map(|e| e.family));
+    match family {
         Some("voxel") => {
             let level = params.get("voxel.levels", 10u32).unwrap_or(10);
             format!(

@@ -95,6 +95,13 @@ pub enum Preset {
     /// frame rate rendering every frame through its root at 1024×768, 800×600 and 400×300; the
     /// reference BVH and a plain SVDAG of frame 0 beside them. About 10 minutes on 2 cores.
     SvdagTemporal,
+    /// Seed 001 Table 4 on room (closed objects, a ceiling lamp: six light faces), city (closed
+    /// buildings) and terrain (few closed objects): storage of a shadow map (S1), the shadow SVDAG
+    /// (S2) and the optimised one (S3) at 1024³ … 16384³ (as far as memory allows), growth per
+    /// doubling and build time beside the reference BVH's; at 1024³ the shadow workload's points
+    /// of a 512² render answered by point queries, the shadow map and shadow rays through bvh,
+    /// esvo, svdag and org, each against the BVH's rays. About 10 minutes on 2 cores.
+    SvdagShadow,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -274,6 +281,9 @@ pub struct Plan {
     pub frames: Option<u32>,
     /// Image sizes a structure holding many frames renders its animation at, frame by frame.
     pub animation_sizes: Vec<(u32, u32)>,
+    /// The voxel level at which a point-query structure's answers are compared with shadow rays
+    /// through the ray structures (which are built at that level too); `None`: at every level.
+    pub shadow_compare_level: Option<u32>,
 }
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
@@ -297,6 +307,7 @@ impl Preset {
             Preset::SvdagTables => "svdag-tables",
             Preset::EsvoScale => "esvo-scale",
             Preset::SvdagTemporal => "svdag-temporal",
+            Preset::SvdagShadow => "svdag-shadow",
         }
     }
 
@@ -330,6 +341,8 @@ impl Preset {
                 (vec!["svdag.temporal=incremental".into()], Some("incremental".into())),
                 (vec!["svdag.temporal=all".into()], Some("all".into())),
             ],
+            // Table 4's resolutions, 1000³ … 32000³ in the paper; ours powers of two.
+            (Preset::SvdagShadow, "svdag-shadow") => (10..=14).map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -357,6 +370,7 @@ impl Preset {
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
             Preset::EsvoScale => vec!["bvh", "esvo"],
             Preset::SvdagTemporal => vec!["bvh", "svdag", "svdag-temporal"],
+            Preset::SvdagShadow => vec!["svdag-shadow"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -375,6 +389,7 @@ impl Preset {
             Preset::SvdagTables => &["svdag.build=octree"],
             // 1024³, the resolution of seed 001's Table 5 scenes' comparisons (issue 13).
             Preset::SvdagTemporal => &["voxel.levels=10"],
+            Preset::SvdagShadow => &[],
             Preset::OrgFast | Preset::EsvoScale => &[],
         }
     }
@@ -394,6 +409,7 @@ impl Preset {
             Preset::OrgFast => vec!["bunny", "dragon-48k", "city", "terrain", "dragon"],
             Preset::EsvoScale => vec!["dragon"],
             Preset::SvdagTemporal => scenes::ANIMATED_SCENES.to_vec(),
+            Preset::SvdagShadow => vec!["room", "city", "terrain"],
         };
         list.into_iter().map(String::from).collect()
     }
@@ -417,6 +433,15 @@ impl Preset {
             Preset::SvdagTables => (512, 512),
             Preset::OrgFast | Preset::EsvoScale => (1024, 1024),
             Preset::SvdagTemporal => (1024, 768),
+            Preset::SvdagShadow => (512, 512),
+        }
+    }
+
+    /// The one level of the preset's sweep whose shadow DAGs are compared with shadow rays.
+    fn shadow_compare_level(self) -> Option<u32> {
+        match self {
+            Preset::SvdagShadow => Some(10),
+            _ => None,
         }
     }
 
@@ -442,6 +467,8 @@ impl Preset {
     fn build_reps(self) -> Option<(u32, u32)> {
         match self {
             Preset::EsvoScale => Some((0, 1)),
+            // 16384² light maps: seconds per build.
+            Preset::SvdagShadow => Some((1, 3)),
             _ => None,
         }
     }
@@ -502,6 +529,7 @@ impl RunArgs {
                 .collect(),
             levels: self.levels.clone(),
             frames: self.frames.or(preset.frames()),
+            shadow_compare_level: if self.levels.is_empty() { preset.shadow_compare_level() } else { None },
             animation_sizes: match (preset.animation_sizes(), self.width.is_some() || self.height.is_some()) {
                 (sizes, false) if !sizes.is_empty() => sizes,
                 _ => vec![(self.width.unwrap_or(w), self.height.unwrap_or(h))],

@@ -12,6 +12,7 @@ mod merge;
 mod output;
 mod probes;
 mod run;
+mod shadows;
 
 use std::process::ExitCode;
 
@@ -79,6 +80,10 @@ fn list(what: ListWhat) {
             if let Err(why) = (s.available)() {
                 println!("  {:<14} {:<9} unavailable here: {why}", "", "");
             }
+        }
+        println!("point-query structures (measured on the shadow workload's points, beside shadow rays):");
+        for s in kernels::QUERY_STRUCTURES {
+            println!("  {:<14} {:<9} {}", s.name, s.family, s.summary);
         }
     }
     if all || what == ListWhat::Backends {

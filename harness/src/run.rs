@@ -25,6 +25,7 @@ use crate::gpu;
 use crate::images;
 use crate::machine;
 use crate::output::RunOutput;
+use crate::shadows;
 
 /// The structure every other one is checked against, and that is checked against brute force.
 const REFERENCE: &str = reports::compare::REFERENCE;
@@ -43,9 +44,12 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     }
     // Every case's parameter values, before the first build: a bad value is a usage error.
     for structure in &plan.structures {
-        let entry = kernels::find_structure(structure).context("validated above")?;
+        let check = match kernels::find_query_structure(structure) {
+            Some(q) => q.check,
+            None => kernels::find_structure(structure).context("validated above")?.check,
+        };
         for (p, _) in variants(&plan, &params, structure) {
-            (entry.check)(&p).with_context(|| format!("structure '{structure}'"))?;
+            check(&p).with_context(|| format!("structure '{structure}'"))?;
         }
     }
     let budget = Budget::new(args.memory_limit);
@@ -114,6 +118,19 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                 // One case's failure, a panic included, costs that case alone: it is listed with
                 // its reason and the matrix goes on.
                 let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    if kernels::find_query_structure(structure).is_some() {
+                        let level = params.get("voxel.levels", 10u32).unwrap_or(10);
+                        let compare = plan.shadow_compare_level.is_none_or(|l| l == level);
+                        let input = shadows::ShadowCaseInput {
+                            scene: ctx.scene,
+                            input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params: &params },
+                            structure,
+                            variant: variant.clone(),
+                            load_ms: ctx.load_ms,
+                            degenerate: ctx.degenerate,
+                        };
+                        return shadows::measure(input, &plan, &bar, &budget, compare);
+                    }
                     measure_case(&mut ctx, structure, &params, variant.clone(), &plan, args, &out, &bar, &budget)
                 }));
                 match attempt {
@@ -214,7 +231,8 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 /// The parameter sets one structure is measured with, each with its variant label: one per
 /// `--levels` entry for a voxel structure, else the preset's own sweep, otherwise just the run's.
 fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Option<String>)> {
-    let voxel = kernels::find_structure(structure).is_some_and(|e| e.family == "voxel");
+    let voxel = kernels::find_structure(structure).is_some_and(|e| e.family == "voxel")
+        || kernels::find_query_structure(structure).is_some_and(|e| e.family == "voxel");
     if voxel && !plan.levels.is_empty() {
         return plan.levels.iter().map(|&l| (params.with("voxel.levels", l), None)).collect();
     }
@@ -245,8 +263,12 @@ fn check_optimised(allow: bool) -> Result<()> {
 
 fn validate(plan: &Plan) -> Result<()> {
     for s in &plan.structures {
-        if kernels::find_structure(s).is_none() {
-            let known: Vec<&str> = kernels::STRUCTURES.iter().map(|e| e.name).collect();
+        if kernels::find_structure(s).is_none() && kernels::find_query_structure(s).is_none() {
+            let known: Vec<&str> = kernels::STRUCTURES
+                .iter()
+                .map(|e| e.name)
+                .chain(kernels::QUERY_STRUCTURES.iter().map(|e| e.name))
+                .collect();
             bail!("unknown structure '{s}' (known: {})", known.join(", "));
         }
     }
@@ -385,6 +407,7 @@ fn measure_case(
         machine: None,
         skipped: Vec::new(),
         animation: Vec::new(),
+        shadow: Vec::new(),
     };
     let camera = Camera::new(scene.camera_spec(), plan.width, plan.height);
     let shade = ShadeContext::for_scene(scene, args.seed);

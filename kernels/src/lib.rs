@@ -29,7 +29,10 @@ pub mod stats;
 use glam::Vec3;
 use scenes::{Camera, Ray};
 
-pub use registry::{Accel, STRUCTURES, StructureEntry, build_structure, find_structure, param_keys};
+pub use registry::{
+    Accel, QUERY_STRUCTURES, QueryEntry, STRUCTURES, StructureEntry, build_structure, find_query_structure,
+    find_structure, param_keys,
+};
 pub use stats::{Counters, MAX_STEPS, NoStats, Stats};
 
 /// The nearest intersection found along a ray (DESIGN.md §3).

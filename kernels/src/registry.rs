@@ -194,9 +194,36 @@ fn build_grid(name: &str, input: &BuildInput) -> Result<Box<dyn Accel>, BuildErr
     Ok(Box::new(structures::grid::build(input, kind)?))
 }
 
+/// A structure that answers point queries rather than tracing rays (the shadow SVDAG: "is this
+/// point lit?"). The harness measures it on the shadow workload's points beside shadow rays
+/// through the ray structures, not with renders of its own.
+pub struct QueryEntry {
+    pub name: &'static str,
+    pub family: &'static str,
+    pub summary: &'static str,
+    /// The `--param` keys the builder reads.
+    pub params: &'static [&'static str],
+    pub check: fn(&Params) -> Result<(), BuildError>,
+}
+
+pub static QUERY_STRUCTURES: &[QueryEntry] = &[QueryEntry {
+    name: "svdag-shadow",
+    family: "voxel",
+    summary: "shadow SVDAG (seed 001 §3): the light's view voxelised lit/shadow/mixed from double depth maps, \
+              2 bits per child; point queries on the shadow workload's points; --levels L, \
+              shadow.variant=optimised|plain (which answers and counts; both are built)",
+    params: &["voxel.levels", "shadow.variant"],
+    check: |p| structures::svdag::shadow::ShadowParams::from_params(p).map(drop),
+}];
+
+pub fn find_query_structure(name: &str) -> Option<&'static QueryEntry> {
+    QUERY_STRUCTURES.iter().find(|s| s.name == name)
+}
+
 /// Every `--param` key with the structure that reads it.
 pub fn param_keys() -> Vec<(&'static str, &'static str)> {
-    STRUCTURES.iter().flat_map(|e| e.params.iter().map(move |&k| (k, e.name))).collect()
+    let queries = QUERY_STRUCTURES.iter().flat_map(|e| e.params.iter().map(move |&k| (k, e.name)));
+    STRUCTURES.iter().flat_map(|e| e.params.iter().map(move |&k| (k, e.name))).chain(queries).collect()
 }
 
 pub fn find_structure(name: &str) -> Option<&'static StructureEntry> {
@@ -232,5 +259,17 @@ mod tests {
             declared.sort();
             assert_eq!(read, declared, "{}: keys read vs declared", entry.name);
         }
+        let params = structures::Params::parse(["voxel.levels=5"]).expect("parses");
+        structures::svdag::shadow::ShadowSvdag::build(&BuildInput {
+            scene: &scene,
+            triangles: scene.triangles(),
+            params: &params,
+        })
+        .expect("svdag-shadow builds");
+        let mut read: Vec<String> = params.keys_read().into_iter().collect();
+        read.sort();
+        let mut declared: Vec<String> = QUERY_STRUCTURES[0].params.iter().map(|k| k.to_string()).collect();
+        declared.sort();
+        assert_eq!(read, declared, "svdag-shadow: keys read vs declared");
     }
 }

@@ -13,6 +13,7 @@ pub mod plots;
 pub mod references;
 pub mod scaling;
 pub mod schema;
+pub mod svdag_shadow;
 pub mod svdag_tables;
 pub mod svdag_temporal;
 

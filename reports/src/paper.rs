@@ -23,7 +23,8 @@ pub fn section(results: &Results) -> String {
         "esvo-scale" => esvo_scale(results),
         _ => String::new(),
     };
-    // Tables 5–6 wherever a run has temporal SVDAG cases.
+    // Tables 4–6 wherever a run has shadow or temporal SVDAG cases.
+    out.push_str(&crate::svdag_shadow::section(results));
     out.push_str(&crate::svdag_temporal::section(results));
     out.push_str(&esvo_budget(results));
     out

@@ -189,6 +189,35 @@ pub struct Case {
     /// (seed 001 Table 6's frame rates).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub animation: Vec<AnimationRender>,
+    /// A point-query structure (`svdag-shadow`): the shadow workload's points answered by it, by
+    /// the shadow map it encodes, and by shadow rays through the ray structures, each against
+    /// the reference BVH's shadow rays.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub shadow: Vec<ShadowRow>,
+}
+
+/// One way of answering "is this point lit?" for every light-facing visible surface point of a
+/// primary render (the reference's hits), timed over all points per repetition.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShadowRow {
+    /// e.g. `svdag-shadow [optimised]`, `shadow map`, `bvh`.
+    pub method: String,
+    /// `query` (a point query), `lookup` (a shadow-map texel) or `ray` (a shadow ray).
+    pub kind: String,
+    /// The structure's bytes (a ray structure's whole memory).
+    pub bytes: u64,
+    pub points: u64,
+    /// Points outside the light's frustum (a query structure's only).
+    pub outside: u64,
+    #[serde(flatten)]
+    pub timing: Timing,
+    /// Millions of points answered per second at the median repetition.
+    pub m_per_s: f64,
+    pub occluded_fraction: f64,
+    /// Points whose answer differs from the reference BVH's shadow ray.
+    pub differ: u64,
+    /// `1 − differ / points answered`.
+    pub agreement: f64,
 }
 
 /// Every frame of an animation rendered once per repetition (primary rays, shaded, on the CPU);
