@@ -186,16 +186,18 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                     let per_frame = svdag_bytes(n, voxels);
                     if all { frames * per_frame } else { 2.0 * per_frame + 64.0 * n }
                 }
-                // Per light face and texel: the two depth maps while rasterised (8 + 4 B) and
-                // read out (2 × 4 B), the slice counts kept (2 × 2 B), one variant's pyramids
-                // (2 × 2 B × 4/3); the DAGs are far smaller. A light inside the scene has six faces.
+                // Per texel of every light face: the 16-bit slice counts kept (4 B) and their
+                // pyramids; per texel of the face being converted, its two f32 depth maps (8 B).
+                // A light inside the scene has six faces. Fitted to the peaks at 1024² and 4096²
+                // (room, six faces: 32 B per texel; city, one: 11.5 B, its DAG larger):
+                // estimate/peak 1.1–1.6.
                 "svdag-shadow" => {
                     let b = input.scene.bounds().framed();
                     let light = input.scene.light_position();
                     let inside = b.min.cmplt(light).all() && light.cmplt(b.max).all();
                     let faces = if inside { 6.0 } else { 1.0 };
                     let texels = 4f64.powi(level.min(31) as i32);
-                    faces * texels * 14.0 + texels * 16.0 + 16.0 * 1_048_576.0
+                    texels * (4.0 * faces + 14.0) + 16.0 * 1_048_576.0
                 }
                 // The sub-cube build holds the finished words, one batch of sub-cubes (4 M voxels:
                 // chunks, octrees, contours, ~100 B each) and the triangles' setup, never the
