@@ -254,6 +254,16 @@ const I64_EDGE_LIMIT: i128 = 1 << 61;
 /// two, is an integer `f64` holds, so stepping is exact and equals converting the integer.
 const F64_EDGE_LIMIT: i128 = 1 << 52;
 
+/// The object of each triangle (`u32::MAX` for none), and whether each object is closed.
+fn objects(scene: &Scene) -> (Vec<u32>, Vec<bool>) {
+    let mut object_of = vec![u32::MAX; scene.mesh.triangle_count()];
+    for (o, obj) in scene.objects.iter().enumerate() {
+        let range = obj.first_triangle as usize..(obj.first_triangle + obj.triangle_count) as usize;
+        object_of[range].fill(o as u32);
+    }
+    (object_of, scene.objects.iter().map(|o| o.closed).collect())
+}
+
 /// Rasterises every triangle of `scene` into the double depth map of `space`.
 ///
 /// Binned by bands of whole rows: each triangle is clipped and snapped once ([`Setup`]) and
@@ -263,13 +273,7 @@ const F64_EDGE_LIMIT: i128 = 1 << 52;
 pub fn depth_maps(scene: &Scene, space: &LightSpace) -> DepthMaps {
     let n = space.resolution() as usize;
     let mesh = &scene.mesh;
-    // The object of each triangle, and whether it is closed.
-    let mut object_of = vec![u32::MAX; mesh.triangle_count()];
-    for (o, obj) in scene.objects.iter().enumerate() {
-        let range = obj.first_triangle as usize..(obj.first_triangle + obj.triangle_count) as usize;
-        object_of[range].fill(o as u32);
-    }
-    let closed: Vec<bool> = scene.objects.iter().map(|o| o.closed).collect();
+    let (object_of, closed) = objects(scene);
     let setups: Vec<Setup> = (0..mesh.triangle_count())
         .into_par_iter()
         .with_min_len(256)
@@ -1154,13 +1158,7 @@ mod tests {
     fn reference_depth_maps(scene: &Scene, space: &LightSpace) -> DepthMaps {
         let n = space.resolution() as usize;
         let mesh = &scene.mesh;
-        // The object of each triangle, and whether it is closed.
-        let mut object_of = vec![u32::MAX; mesh.triangle_count()];
-        for (o, obj) in scene.objects.iter().enumerate() {
-            let range = obj.first_triangle as usize..(obj.first_triangle + obj.triangle_count) as usize;
-            object_of[range].fill(o as u32);
-        }
-        let closed: Vec<bool> = scene.objects.iter().map(|o| o.closed).collect();
+        let (object_of, closed) = objects(scene);
         // Pass 1: the nearest fragment's depth and object, packed (depth bits high: positive f32
         // bits order as the floats do).
         let first: Vec<AtomicU64> = (0..n * n).map(|_| AtomicU64::new(u64::MAX)).collect();

@@ -291,6 +291,11 @@ fn stream_frame(
     (s.finish_dag(), stats)
 }
 
+/// Frames `0..frames` in time order, frame 0 already generated.
+fn in_order(frames: u32, first: Scene, frame: &impl Fn(u32) -> Scene) -> impl Iterator<Item = (u32, Scene)> + '_ {
+    std::iter::once((0, first)).chain((1..frames).map(move |t| (t, frame(t))))
+}
+
 fn build_all(
     frames: u32,
     frame: &impl Fn(u32) -> Scene,
@@ -303,12 +308,7 @@ fn build_all(
     let mut built: Vec<Streamed> = Vec::with_capacity(frames as usize);
     let mut stats = Vec::with_capacity(frames as usize);
     let mut voxelize0 = VoxelizeStats::default();
-    let mut scene = Some(first);
-    for t in 0..frames {
-        let scene = match scene.take() {
-            Some(s) => s,
-            None => frame(t),
-        };
+    for (t, scene) in in_order(frames, first, frame) {
         check(&scene, t)?;
         let start = Instant::now();
         let (done, vs) =
@@ -353,12 +353,7 @@ fn build_incremental(
     let mut voxelize0 = VoxelizeStats::default();
     // The previous frame and the sub-cubes it was made of.
     let mut prev: Option<(Scene, Vec<Subcube>)> = None;
-    let mut next = Some(first);
-    for t in 0..frames {
-        let scene = match next.take() {
-            Some(s) => s,
-            None => frame(t),
-        };
+    for (t, scene) in in_order(frames, first, frame) {
         check(&scene, t)?;
         let start = Instant::now();
         let (done, vs, changed) = match &prev {
