@@ -229,10 +229,7 @@ fn svdag_bytes(triangles: f64, voxels: f64) -> f64 {
 
 /// What to say when a build is refused.
 pub fn build_hint(structure: &str, params: &Params) -> String {
-    let family = kernels::find_structure(structure)
-        .map(|e| e.family)
-        .or_else(|| kernels::find_query_structure(structure).map(|e| e.family));
-    match family {
+    match kernels::structure_family(structure) {
         Some("voxel") => {
             let level = params.get("voxel.levels", 10u32).unwrap_or(10);
             format!(

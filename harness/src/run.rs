@@ -44,10 +44,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     }
     // Every case's parameter values, before the first build: a bad value is a usage error.
     for structure in &plan.structures {
-        let check = match kernels::find_query_structure(structure) {
-            Some(q) => q.check,
-            None => kernels::find_structure(structure).context("validated above")?.check,
-        };
+        let check = kernels::structure_check(structure).context("validated above")?;
         for (p, _) in variants(&plan, &params, structure) {
             check(&p).with_context(|| format!("structure '{structure}'"))?;
         }
@@ -122,7 +119,6 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                         let level = params.get("voxel.levels", 10u32).unwrap_or(10);
                         let compare = plan.shadow_compare_level.is_none_or(|l| l == level);
                         let input = shadows::ShadowCaseInput {
-                            scene: ctx.scene,
                             input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params: &params },
                             structure,
                             variant: variant.clone(),
@@ -231,8 +227,7 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 /// The parameter sets one structure is measured with, each with its variant label: one per
 /// `--levels` entry for a voxel structure, else the preset's own sweep, otherwise just the run's.
 fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Option<String>)> {
-    let voxel = kernels::find_structure(structure).is_some_and(|e| e.family == "voxel")
-        || kernels::find_query_structure(structure).is_some_and(|e| e.family == "voxel");
+    let voxel = kernels::structure_family(structure) == Some("voxel");
     if voxel && !plan.levels.is_empty() {
         return plan.levels.iter().map(|&l| (params.with("voxel.levels", l), None)).collect();
     }
@@ -263,12 +258,8 @@ fn check_optimised(allow: bool) -> Result<()> {
 
 fn validate(plan: &Plan) -> Result<()> {
     for s in &plan.structures {
-        if kernels::find_structure(s).is_none() && kernels::find_query_structure(s).is_none() {
-            let known: Vec<&str> = kernels::STRUCTURES
-                .iter()
-                .map(|e| e.name)
-                .chain(kernels::QUERY_STRUCTURES.iter().map(|e| e.name))
-                .collect();
+        if kernels::structure_family(s).is_none() {
+            let known: Vec<&str> = kernels::structure_names().collect();
             bail!("unknown structure '{s}' (known: {})", known.join(", "));
         }
     }
@@ -548,22 +539,33 @@ fn timed_builds(
     input: &BuildInput,
     plan: &Plan,
 ) -> Result<(Box<dyn Accel>, BuildStats)> {
+    timed(reference.map(|r| || Ok((r.build)(input)?)), || Ok((entry.build)(input)?), plan)
+}
+
+/// Runs `build` `build_warmup + build_reps` times, each after one `reference` build (timed in
+/// alternation, so both see the same load); times the last reps and the heap peak; keeps the
+/// last result. What both [`timed_builds`] and a point-query structure's case time.
+pub(crate) fn timed<T, R>(
+    mut reference: Option<impl FnMut() -> Result<R>>,
+    mut build: impl FnMut() -> Result<T>,
+    plan: &Plan,
+) -> Result<(T, BuildStats)> {
     let mut samples = Vec::new();
     let mut reference_samples = Vec::new();
     let mut peak = 0usize;
-    let mut built: Option<Box<dyn Accel>> = None;
+    let mut built: Option<T> = None;
     for i in 0..plan.build_warmup + plan.build_reps {
         drop(built.take());
-        if let Some(reference) = reference {
+        if let Some(reference) = reference.as_mut() {
             let t = Instant::now();
-            drop((reference.build)(input)?);
+            drop(reference()?);
             if i >= plan.build_warmup {
                 reference_samples.push(ms_since(t));
             }
         }
         let base = alloc::reset_peak();
         let t = Instant::now();
-        let s = (entry.build)(input)?;
+        let s = build()?;
         let ms = ms_since(t);
         peak = peak.max(alloc::peak_bytes().saturating_sub(base));
         if i >= plan.build_warmup {
@@ -571,14 +573,14 @@ fn timed_builds(
         }
         built = Some(s);
     }
-    let accel = built.context("no build ran")?;
+    let built = built.context("no build ran")?;
     let build = BuildStats {
         timing: Timing::from_samples(&samples),
         peak_bytes: peak as u64,
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         estimated_peak_bytes: None,
     };
-    Ok((accel, build))
+    Ok((built, build))
 }
 
 /// Renders `warmup + reps` times without counters (timed), then once with counters. With a

@@ -22,9 +22,8 @@ use reports::{BuildStats, Case, MemoryStats, ShadowRow, Timing};
 use scenes::{Camera, Scene};
 use structures::svdag::shadow::{ShadowSvdag, Variant};
 use structures::voxel::VoxelGrid;
-use structures::{BuildInput, Params, Structure};
+use structures::{BuildInput, Structure};
 
-use crate::alloc;
 use crate::budget::{self, Budget};
 use crate::cli::Plan;
 
@@ -33,7 +32,6 @@ const RAY_STRUCTURES: [&str; 4] = ["bvh", "esvo", "svdag", "org"];
 
 /// What the case needs of the run.
 pub struct ShadowCaseInput<'a> {
-    pub scene: &'a Scene,
     pub input: BuildInput<'a>,
     pub structure: &'a str,
     pub variant: Option<String>,
@@ -43,7 +41,8 @@ pub struct ShadowCaseInput<'a> {
 
 /// Builds and measures one `svdag-shadow` case.
 pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budget, compare: bool) -> Result<Case> {
-    let ShadowCaseInput { scene, input, structure, variant, load_ms, degenerate } = c;
+    let ShadowCaseInput { input, structure, variant, load_ms, degenerate } = c;
+    let scene = input.scene;
     let params = input.params;
     let level = params.get("voxel.levels", 10u32)?;
     let estimate = budget::build_bytes(structure, &input) + budget::build_bytes(REFERENCE, &input);
@@ -53,7 +52,13 @@ pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budg
         budget::build_hint(structure, params),
     )?;
     bar.set_message(format!("{}/{structure}: building", scene.name));
-    let (dag, reference, build) = timed_builds(&input, plan)?;
+    // The reference is built in alternation with the DAG (timed), and once more for the
+    // comparison's primary hits and shadow rays.
+    let (dag, build) = crate::run::timed(
+        Some(|| kernels::build_structure(REFERENCE, &input).context("the reference exists")?.map_err(Into::into)),
+        || Ok(ShadowSvdag::build(&input)?),
+        plan,
+    )?;
     let memory = dag.memory();
     let mut case = Case {
         scene: scene.name.clone(),
@@ -76,44 +81,13 @@ pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budg
     };
     if compare {
         bar.set_message(format!("{}/{structure}: shadow queries and rays", scene.name));
+        let reference = kernels::build_structure(REFERENCE, &input).context("the reference exists")??;
         case.shadow = compare_answers(scene, &dag, reference.as_ref(), &input, plan, bar)?;
     }
     Ok(case)
 }
 
 const REFERENCE: &str = reports::compare::REFERENCE;
-
-/// Builds the reference and the shadow DAG in alternation, `build_warmup + build_reps` times;
-/// keeps the last of each.
-fn timed_builds(input: &BuildInput, plan: &Plan) -> Result<(ShadowSvdag, Box<dyn Accel>, BuildStats)> {
-    let (mut samples, mut reference_samples, mut peak) = (Vec::new(), Vec::new(), 0usize);
-    let (mut built, mut reference) = (None, None);
-    for i in 0..plan.build_warmup + plan.build_reps.max(1) {
-        drop(built.take());
-        drop(reference.take());
-        let t = Instant::now();
-        let r = kernels::build_structure(REFERENCE, input).context("the reference exists")??;
-        let reference_ms = ms_since(t);
-        let base = alloc::reset_peak();
-        let t = Instant::now();
-        let dag = ShadowSvdag::build(input)?;
-        let ms = ms_since(t);
-        peak = peak.max(alloc::peak_bytes().saturating_sub(base));
-        if i >= plan.build_warmup {
-            samples.push(ms);
-            reference_samples.push(reference_ms);
-        }
-        built = Some(dag);
-        reference = Some(r);
-    }
-    let build = BuildStats {
-        timing: Timing::from_samples(&samples),
-        peak_bytes: peak as u64,
-        reference_timing: Some(Timing::from_samples(&reference_samples)),
-        estimated_peak_bytes: None,
-    };
-    Ok((built.context("no build ran")?, reference.context("no build ran")?, build))
-}
 
 /// Every way of answering, on the same points, timed over all of them per repetition.
 fn compare_answers(
@@ -179,9 +153,7 @@ fn compare_answers(
             reference
         } else {
             // Voxel structures at the shadow DAG's level; untimed builds.
-            let params: Params = input.params.clone();
-            let i = BuildInput { scene: input.scene, triangles: input.triangles.clone(), params: &params };
-            owned = kernels::build_structure(name, &i).context("a ray structure")??;
+            owned = kernels::build_structure(name, input).context("a ray structure")??;
             owned.as_ref()
         };
         // A voxel structure's ray from the surface starts inside the surface's own voxels (and

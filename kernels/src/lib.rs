@@ -31,7 +31,7 @@ use scenes::{Camera, Ray};
 
 pub use registry::{
     Accel, QUERY_STRUCTURES, QueryEntry, STRUCTURES, StructureEntry, build_structure, find_query_structure,
-    find_structure, param_keys,
+    find_structure, param_keys, structure_check, structure_family, structure_names,
 };
 pub use stats::{Counters, MAX_STEPS, NoStats, Stats};
 

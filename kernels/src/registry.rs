@@ -19,7 +19,7 @@ pub struct StructureEntry {
     pub params: &'static [&'static str],
     /// Resolves and range-checks the parameters without building (the harness checks every
     /// case's parameters before the first build).
-    pub check: fn(&Params) -> Result<(), BuildError>,
+    pub check: ParamCheck,
     pub build: fn(&BuildInput) -> Result<Box<dyn Accel>, BuildError>,
     /// Whether this machine can build it, checked before anything else is built for a case:
     /// `Err` says what is missing and how to get it (Embree's library); `always` for the rest.
@@ -203,7 +203,7 @@ pub struct QueryEntry {
     pub summary: &'static str,
     /// The `--param` keys the builder reads.
     pub params: &'static [&'static str],
-    pub check: fn(&Params) -> Result<(), BuildError>,
+    pub check: ParamCheck,
 }
 
 pub static QUERY_STRUCTURES: &[QueryEntry] = &[QueryEntry {
@@ -218,6 +218,24 @@ pub static QUERY_STRUCTURES: &[QueryEntry] = &[QueryEntry {
 
 pub fn find_query_structure(name: &str) -> Option<&'static QueryEntry> {
     QUERY_STRUCTURES.iter().find(|s| s.name == name)
+}
+
+/// The family (`triangle`, `voxel`) of any structure, ray or point-query.
+pub fn structure_family(name: &str) -> Option<&'static str> {
+    find_structure(name).map(|e| e.family).or_else(|| find_query_structure(name).map(|e| e.family))
+}
+
+/// Resolves and range-checks a structure's parameters without building.
+pub type ParamCheck = fn(&Params) -> Result<(), BuildError>;
+
+/// The parameter check of any structure, ray or point-query.
+pub fn structure_check(name: &str) -> Option<ParamCheck> {
+    find_structure(name).map(|e| e.check).or_else(|| find_query_structure(name).map(|e| e.check))
+}
+
+/// Every structure's name, ray structures first.
+pub fn structure_names() -> impl Iterator<Item = &'static str> {
+    STRUCTURES.iter().map(|e| e.name).chain(QUERY_STRUCTURES.iter().map(|e| e.name))
 }
 
 /// Every `--param` key with the structure that reads it.

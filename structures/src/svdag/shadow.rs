@@ -1049,7 +1049,7 @@ fn build_dag(pyramids: &[Pyramid], variant: Variant) -> Result<ShadowDag, BuildE
         .with_max_len(1)
         .map(|&(face, n)| {
             let mut dag = Dag::shadow(level, split);
-            let root = emit(&pyramids[face], &mut dag, n);
+            let root = emit(&pyramids[face], &mut dag, n, None);
             (dag, root)
         })
         .collect();
@@ -1061,7 +1061,7 @@ fn build_dag(pyramids: &[Pyramid], variant: Variant) -> Result<ShadowDag, BuildE
     // The levels above the split, from the frontier's offsets.
     let offsets: HashMap<(usize, u64), u32> = frontier.iter().map(|&(f, n)| (f, n.code())).zip(merged).collect();
     let roots: Vec<u32> = (0..pyramids.len())
-        .map(|face| emit_top(&pyramids[face], &mut dag, root, split, &|n: Node| offsets[&(face, n.code())]))
+        .map(|face| emit(&pyramids[face], &mut dag, root, Some((split, &|n: Node| offsets[&(face, n.code())]))))
         .collect();
     let nodes_per_level = dag.levels.iter().map(|l| l.unique).collect();
     let svo_nodes_per_level = dag.levels.iter().map(|l| l.raw).collect();
@@ -1077,25 +1077,16 @@ fn child_codes(pyramid: &Pyramid, node: Node) -> [u32; 8] {
     })
 }
 
-/// Interns the mixed node `node` and, first, its mixed descendants; returns its offset.
-fn emit(pyramid: &Pyramid, dag: &mut Dag, node: Node) -> u32 {
-    let codes = child_codes(pyramid, node);
-    let mut key = [0u32; 9];
-    let mut n = 1;
-    for (s, &code) in codes.iter().enumerate() {
-        key[0] |= code << (2 * s);
-        if code == MIXED {
-            key[n] = emit(pyramid, dag, node.child(s as u32));
-            n += 1;
-        }
-    }
-    dag.at(node.l).intern(&key[..n])
-}
+/// The split level above which [`emit`] builds, and the offsets already merged at it.
+type Merged<'a> = Option<(u32, &'a dyn Fn(Node) -> u32)>;
 
-/// [`emit`] above the split level, where mixed children are already merged (`merged`).
-fn emit_top(pyramid: &Pyramid, dag: &mut Dag, node: Node, split: u32, merged: &dyn Fn(Node) -> u32) -> u32 {
-    if node.l == split {
-        return merged(node);
+/// Interns the mixed node `node` and, first, its mixed descendants; returns its offset. Above a
+/// split level (`merged`), a node at that level is not built again but looked up.
+fn emit(pyramid: &Pyramid, dag: &mut Dag, node: Node, merged: Merged) -> u32 {
+    if let Some((split, offset)) = merged
+        && node.l == split
+    {
+        return offset(node);
     }
     let codes = child_codes(pyramid, node);
     let mut key = [0u32; 9];
@@ -1103,7 +1094,7 @@ fn emit_top(pyramid: &Pyramid, dag: &mut Dag, node: Node, split: u32, merged: &d
     for (s, &code) in codes.iter().enumerate() {
         key[0] |= code << (2 * s);
         if code == MIXED {
-            key[n] = emit_top(pyramid, dag, node.child(s as u32), split, merged);
+            key[n] = emit(pyramid, dag, node.child(s as u32), merged);
             n += 1;
         }
     }

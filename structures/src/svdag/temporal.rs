@@ -174,31 +174,15 @@ pub fn build(frames: u32, frame: impl Fn(u32) -> Scene, params: TemporalParams) 
         });
     }
     let first = frame(0);
-    let bounds = first.bounds();
-    let name = first.name.clone();
-    let grid = VoxelGrid::fit(bounds, params.svdag.level);
-    let check = |scene: &Scene, t: u32| -> Result<(), BuildError> {
-        if scene.bounds() != bounds {
-            return Err(BuildError::Limit {
-                structure: "svdag-temporal",
-                detail: format!(
-                    "frame {t} of '{}' has bounds {:?}, frame 0 {:?}: every frame must share one voxel grid",
-                    name,
-                    scene.bounds(),
-                    bounds
-                ),
-            });
-        }
-        Ok(())
-    };
+    let grid = VoxelGrid::fit(first.bounds(), params.svdag.level);
     let sub_level = voxel::subcube_level(params.svdag.level);
+    let source = Frames { count: frames, frame: &frame, first, grid, params: params.svdag, sub_level };
     let (dag, roots, mut frame_stats, voxelize, merge_ms) = match params.mode {
-        Mode::All => build_all(frames, &frame, first, &check, grid, params.svdag, sub_level)?,
-        Mode::Incremental => build_incremental(frames, &frame, first, &check, grid, params.svdag, sub_level)?,
+        Mode::All => build_all(source)?,
+        Mode::Incremental => build_incremental(source)?,
     };
     let t = Instant::now();
     let nodes_per_level: Vec<u64> = dag.levels.iter().map(|l| l.unique).collect();
-    let svo_nodes_per_level: Vec<u64> = dag.levels.iter().map(|l| l.raw).collect();
     let (words, level_starts) = lay_out(dag)?;
     let grid_level = grid.level;
     let roots: Vec<Root> = roots
@@ -231,9 +215,10 @@ pub fn build(frames: u32, frame: impl Fn(u32) -> Scene, params: TemporalParams) 
         frame_ms_median: if later.is_empty() { 0.0 } else { later[later.len() / 2] },
         layout_ms,
     };
+    // No `svo_nodes_per_level`: the SVO is per frame (`FrameStats::svo_nodes`), and the merge's
+    // own counts of nodes met depend on the mode (an append meets only what it re-voxelised).
     let svdag_stats = SvdagStats {
         nodes_per_level,
-        svo_nodes_per_level,
         subcube_level: sub_level,
         reduce_ms: frame_stats.iter().map(|s| s.ms).sum::<f64>() + merge_ms,
         layout_ms,
@@ -291,25 +276,45 @@ fn stream_frame(
     (s.finish_dag(), stats)
 }
 
-/// Frames `0..frames` in time order, frame 0 already generated.
-fn in_order(frames: u32, first: Scene, frame: &impl Fn(u32) -> Scene) -> impl Iterator<Item = (u32, Scene)> + '_ {
-    std::iter::once((0, first)).chain((1..frames).map(move |t| (t, frame(t))))
-}
-
-fn build_all(
-    frames: u32,
-    frame: &impl Fn(u32) -> Scene,
+/// The frames both merge modes read, and what they share: one grid, the SVDAG's parameters and
+/// the voxeliser's sub-cube level.
+struct Frames<'a, F> {
+    count: u32,
+    frame: &'a F,
+    /// Frame 0, already generated (its bounds fit the grid).
     first: Scene,
-    check: &impl Fn(&Scene, u32) -> Result<(), BuildError>,
     grid: VoxelGrid,
     params: SvdagParams,
     sub_level: u32,
-) -> Result<Built, BuildError> {
+}
+
+impl<F: Fn(u32) -> Scene> Frames<'_, F> {
+    /// The frames in time order, each checked to share frame 0's bounds (and so its grid).
+    fn in_order(self) -> impl Iterator<Item = Result<(u32, Scene), BuildError>> {
+        let (bounds, name) = (self.first.bounds(), self.first.name.clone());
+        let rest = (1..self.count).map(|t| (t, (self.frame)(t)));
+        std::iter::once((0, self.first)).chain(rest).map(move |(t, scene)| {
+            if scene.bounds() != bounds {
+                return Err(BuildError::Limit {
+                    structure: "svdag-temporal",
+                    detail: format!(
+                        "frame {t} of '{name}' has bounds {:?}, frame 0 {bounds:?}: every frame must share one voxel grid",
+                        scene.bounds()
+                    ),
+                });
+            }
+            Ok((t, scene))
+        })
+    }
+}
+
+fn build_all(source: Frames<impl Fn(u32) -> Scene>) -> Result<Built, BuildError> {
+    let (frames, grid, params, sub_level) = (source.count, source.grid, source.params, source.sub_level);
     let mut built: Vec<Streamed> = Vec::with_capacity(frames as usize);
     let mut stats = Vec::with_capacity(frames as usize);
     let mut voxelize0 = VoxelizeStats::default();
-    for (t, scene) in in_order(frames, first, frame) {
-        check(&scene, t)?;
+    for next in source.in_order() {
+        let (t, scene) = next?;
         let start = Instant::now();
         let (done, vs) =
             stream_frame(&scene, &grid, params, sub_level, Dag::new(params.leaves, params.level, 0), Vec::new(), None);
@@ -338,23 +343,16 @@ fn build_all(
     Ok((dag, roots, stats, voxelize0, merge_ms))
 }
 
-fn build_incremental(
-    frames: u32,
-    frame: &impl Fn(u32) -> Scene,
-    first: Scene,
-    check: &impl Fn(&Scene, u32) -> Result<(), BuildError>,
-    grid: VoxelGrid,
-    params: SvdagParams,
-    sub_level: u32,
-) -> Result<Built, BuildError> {
+fn build_incremental(source: Frames<impl Fn(u32) -> Scene>) -> Result<Built, BuildError> {
+    let (frames, grid, params, sub_level) = (source.count, source.grid, source.params, source.sub_level);
     let mut dag = Dag::with_unmerged_roots(params.leaves, params.level);
     let mut roots = Vec::with_capacity(frames as usize);
     let mut stats = Vec::with_capacity(frames as usize);
     let mut voxelize0 = VoxelizeStats::default();
     // The previous frame and the sub-cubes it was made of.
     let mut prev: Option<(Scene, Vec<Subcube>)> = None;
-    for (t, scene) in in_order(frames, first, frame) {
-        check(&scene, t)?;
+    for next in source.in_order() {
+        let (t, scene) = next?;
         let start = Instant::now();
         let (done, vs, changed) = match &prev {
             None => {
@@ -491,11 +489,9 @@ impl<'a> FrameCounts<'a> {
             // Two roots are never merged; equal root nodes are equal frames.
             return 0;
         }
-        let theirs: Vec<(u32, u32)> = self.children(b).collect();
-        1 + self
-            .children(a)
-            .map(|(s, c)| self.difference(c, theirs.iter().find(|(t, _)| *t == s).map(|&(_, d)| d), depth + 1))
-            .sum::<u64>()
+        let mut theirs = [None; 8];
+        self.children(b).for_each(|(s, d)| theirs[s as usize] = Some(d));
+        1 + self.children(a).map(|(s, c)| self.difference(c, theirs[s as usize], depth + 1)).sum::<u64>()
     }
 }
 
