@@ -1,9 +1,10 @@
 //! Agreement of a render's primary hits with a reference (DESIGN.md §8 `agreement`).
 
 use kernels::cpu::brute_force;
-use kernels::cpu::render::Frame;
+use kernels::cpu::render::{Frame, Sample};
 use rayon::prelude::*;
 use reports::Agreement;
+use reports::images::Difference;
 use scenes::{Camera, Triangle};
 
 /// Triangle tests the brute-force check may spend per case; it samples that many / N pixels.
@@ -22,19 +23,37 @@ struct Tally {
     max_rel_t_error: f64,
 }
 
+/// How a pixel's hit compares with the reference's: the one classification the agreement counts
+/// and the difference view draws.
+fn classify(hit: Option<(f32, u64)>, reference: Option<(f32, u64)>) -> (Difference, Option<f64>) {
+    match (hit, reference) {
+        (Some((t, prim)), Some((rt, rprim))) => {
+            let rel = f64::from((t - rt).abs()) / f64::from(rt.abs()).max(f64::MIN_POSITIVE);
+            let d = if prim != rprim && rel > TIE_REL_T { Difference::Other(rel) } else { Difference::Same };
+            (d, Some(rel))
+        }
+        (None, None) => (Difference::BothMiss, None),
+        (Some(_), None) => (Difference::Extra, None),
+        (None, Some(_)) => (Difference::Missing, None),
+    }
+}
+
+/// A pixel of a frame against the same pixel of the reference's frame.
+pub fn difference(sample: &Sample, reference: &Sample) -> Difference {
+    classify(hit_of(sample), hit_of(reference)).0
+}
+
 impl Tally {
     fn add(&mut self, hit: Option<(f32, u64)>, reference: Option<(f32, u64)>) {
         self.pixels += 1;
-        match (hit, reference) {
-            (Some((t, prim)), Some((rt, rprim))) => {
-                let rel = f64::from((t - rt).abs()) / f64::from(rt.abs()).max(f64::MIN_POSITIVE);
-                self.max_rel_t_error = self.max_rel_t_error.max(rel);
-                if prim != rprim && rel > TIE_REL_T {
-                    self.prim_mismatches += 1;
-                }
-            }
-            (None, None) => {}
-            _ => self.hit_mismatches += 1,
+        let (d, rel) = classify(hit, reference);
+        if let Some(rel) = rel {
+            self.max_rel_t_error = self.max_rel_t_error.max(rel);
+        }
+        match d {
+            Difference::Other(_) => self.prim_mismatches += 1,
+            Difference::Extra | Difference::Missing => self.hit_mismatches += 1,
+            Difference::BothMiss | Difference::Same => {}
         }
     }
 
@@ -57,7 +76,7 @@ impl Tally {
     }
 }
 
-fn hit_of(s: &kernels::cpu::render::Sample) -> Option<(f32, u64)> {
+fn hit_of(s: &Sample) -> Option<(f32, u64)> {
     s.is_hit().then_some((s.t, s.prim))
 }
 

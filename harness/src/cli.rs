@@ -102,7 +102,35 @@ pub enum Preset {
     /// of a 512² render answered by point queries, the shadow map and shadow rays through bvh,
     /// esvo, svdag and org, each against the BVH's rays. About 10 minutes on 2 cores.
     SvdagShadow,
+    /// Seed 000 §5.6 and §6.2: ESVO with and without the beam optimisation (8×8 blocks) at 2048³
+    /// on bunny, dragon, city, terrain and room at 1024×1024: iterations per primary ray (the
+    /// pre-pass's included) and render time, and bytes per voxel beside the paper's budget. Each
+    /// build is timed once. About 4 minutes on 2 cores.
+    EsvoBeam,
+    /// Every reproduction of DESIGN.md §9 in one run and one report, which opens with "Paper
+    /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,
+    /// org-table1, svdag-tables, svdag-shadow, svdag-temporal and esvo-beam, one after the other,
+    /// each with its own settings. Scaled to about 35 minutes on 2 cores (svdag-shadow to 8192³
+    /// instead of 16384³, svdag-temporal's builds and animations timed 3 times instead of 1 + 5);
+    /// `--full` runs every part at its preset's full size (about 50 minutes), `--parts` a few.
+    Paper,
 }
+
+/// The paper preset's parts in the order they run: each a preset of its own, with what it
+/// reproduces (DESIGN.md §9).
+pub const PAPER_PARTS: &[(Preset, &str)] = &[
+    (Preset::OrgFig1, "Seed 002 Fig. 1: Eq. 1 against Algorithm 2 on random thin triangles"),
+    (Preset::OrgFig2, "Seed 002 Fig. 2: RG against ORG over rising triangle counts"),
+    (Preset::OrgTable1, "Seed 002 Table 1: ORG against UG, RG, RG-2 and the reference BVH"),
+    (Preset::SvdagTables, "Seed 001 Tables 1–3 and Fig. 13: SVO, ESVO and SVDAG"),
+    (Preset::SvdagShadow, "Seed 001 Table 4: the shadow SVDAG"),
+    (Preset::SvdagTemporal, "Seed 001 Tables 5–6: the temporal SVDAG"),
+    (Preset::EsvoBeam, "Seed 000 §5.6 and §6.2: ESVO's bytes per voxel and the beam optimisation"),
+];
+
+/// The paper preset's expected wall time on a 2-core machine of the kind CI runs on, minutes:
+/// scaled and `--full` (measured: README "Presets").
+pub const PAPER_MINUTES: (u32, u32) = (35, 50);
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -205,6 +233,14 @@ pub struct RunArgs {
     /// Time code even if the harness was compiled without optimisation (numbers are then meaningless).
     #[arg(long)]
     pub allow_unoptimized: bool,
+    /// The paper preset: run every part at its own preset's full size instead of scaled to fit
+    /// 90 minutes on 2 cores (see `harness list presets`).
+    #[arg(long)]
+    pub full: bool,
+    /// The paper preset: run only these parts (their preset names, comma-separated), e.g.
+    /// org-fig1,esvo-beam.
+    #[arg(long, value_delimiter = ',', value_name = "PRESET,...")]
+    pub parts: Vec<String>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -273,6 +309,8 @@ pub struct Plan {
     /// Build repetitions: `warmup` and `reps` unless the preset times its builds fewer times.
     pub build_warmup: u32,
     pub build_reps: u32,
+    /// Repetitions (warm-up, timed) of a whole animation's render, each every frame of it.
+    pub animation_reps: (u32, u32),
     /// Structure parameters: the preset's, then the user's (later entries win).
     pub params: Vec<String>,
     /// Voxel levels to sweep (`--levels`); empty: the one `voxel.levels` of `params`.
@@ -284,6 +322,18 @@ pub struct Plan {
     /// The voxel level at which a point-query structure's answers are compared with shadow rays
     /// through the ray structures (which are built at that level too); `None`: at every level.
     pub shadow_compare_level: Option<u32>,
+    /// A part of the paper preset scaled down to fit its time (see [`Preset::Paper`]).
+    pub scaled: bool,
+}
+
+/// One part of a many-part run (the paper preset): its preset, what it reproduces, and how it
+/// was scaled down (empty: full size).
+#[derive(Debug, Clone)]
+pub struct PartPlan {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub scaled: String,
+    pub plan: Plan,
 }
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
@@ -308,13 +358,15 @@ impl Preset {
             Preset::EsvoScale => "esvo-scale",
             Preset::SvdagTemporal => "svdag-temporal",
             Preset::SvdagShadow => "svdag-shadow",
+            Preset::EsvoBeam => "esvo-beam",
+            Preset::Paper => "paper",
         }
     }
 
     /// The cases the preset measures of `structure`: per case the parameters it sets (over the
     /// run's) and the variant that names it beside its resolution; empty: one case with the
     /// run's parameters. `--levels` replaces this with a plain level sweep.
-    pub fn sweep(self, structure: &str) -> Vec<(Vec<String>, Option<String>)> {
+    pub fn sweep(self, structure: &str, scaled: bool) -> Vec<(Vec<String>, Option<String>)> {
         let at = |level: u32, extra: &[&str], variant: Option<&str>| {
             let mut params = vec![format!("voxel.levels={level}")];
             params.extend(extra.iter().map(|p| p.to_string()));
@@ -341,8 +393,15 @@ impl Preset {
                 (vec!["svdag.temporal=incremental".into()], Some("incremental".into())),
                 (vec!["svdag.temporal=all".into()], Some("all".into())),
             ],
-            // Table 4's resolutions, 1000³ … 32000³ in the paper; ours powers of two.
-            (Preset::SvdagShadow, "svdag-shadow") => (10..=14).map(|l| at(l, &[], None)).collect(),
+            // Table 4's resolutions, 1000³ … 32000³ in the paper; ours powers of two (to 8192³ in
+            // the paper preset: 16384³ takes a minute a build and 9 GB).
+            (Preset::SvdagShadow, "svdag-shadow") => {
+                (10..=if scaled { 13 } else { 14 }).map(|l| at(l, &[], None)).collect()
+            }
+            // The beam off and on at 2048³, where rays cross many empty octants before a hit.
+            (Preset::EsvoBeam, "esvo") => {
+                vec![at(11, &["esvo.beam=off"], None), at(11, &["esvo.beam=on"], Some("beam"))]
+            }
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -363,6 +422,9 @@ impl Preset {
             Preset::Ci => {
                 kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree" && s != "svdag-temporal").collect()
             }
+            Preset::EsvoBeam => vec!["bvh", "esvo"],
+            // Its parts name their own.
+            Preset::Paper => Vec::new(),
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "bvh"],
@@ -390,7 +452,7 @@ impl Preset {
             // 1024³, the resolution of seed 001's Table 5 scenes' comparisons (issue 13).
             Preset::SvdagTemporal => &["voxel.levels=10"],
             Preset::SvdagShadow => &[],
-            Preset::OrgFast | Preset::EsvoScale => &[],
+            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::Paper => &[],
         }
     }
 
@@ -410,6 +472,8 @@ impl Preset {
             Preset::EsvoScale => vec!["dragon"],
             Preset::SvdagTemporal => scenes::ANIMATED_SCENES.to_vec(),
             Preset::SvdagShadow => vec!["room", "city", "terrain"],
+            Preset::EsvoBeam => vec!["bunny", "dragon", "city", "terrain", "room"],
+            Preset::Paper => Vec::new(),
         };
         list.into_iter().map(String::from).collect()
     }
@@ -431,7 +495,8 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
-            Preset::OrgFast | Preset::EsvoScale => (1024, 1024),
+            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam => (1024, 1024),
+            Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
             Preset::SvdagShadow => (512, 512),
         }
@@ -445,11 +510,23 @@ impl Preset {
         }
     }
 
-    /// Frames of an animated scene the preset asks for (`--frames` overrides).
+    /// Frames of an animated scene the preset asks for (`--frames` overrides). Not scaled down
+    /// for the paper preset: the temporal DAG's share of the frames' DAGs falls with the frames.
     fn frames(self) -> Option<u32> {
         match self {
             Preset::SvdagTemporal => Some(24),
             _ => None,
+        }
+    }
+
+    /// How the paper preset scales this part down, in words (empty: not at all).
+    fn scaled_down(self) -> &'static str {
+        match self {
+            Preset::SvdagShadow => "resolutions 1024³…8192³ (the preset: to 16384³)",
+            Preset::SvdagTemporal => {
+                "builds and each whole-animation render timed 3 times, no warm-up (the preset: 1 + 5)"
+            }
+            _ => "",
         }
     }
 
@@ -462,11 +539,19 @@ impl Preset {
         }
     }
 
+    /// Repetitions (warm-up, timed) of a whole animation's render where they differ from the
+    /// renders': scaled down for the paper preset, 24 frames a repetition.
+    fn animation_reps(self, scaled: bool) -> Option<(u32, u32)> {
+        (self == Preset::SvdagTemporal && scaled).then_some((0, 3))
+    }
+
     /// Build repetitions (warm-up, timed) where they differ from the renders': builds that take
     /// minutes are timed once (their samples say so in the results).
-    fn build_reps(self) -> Option<(u32, u32)> {
+    fn build_reps(self, scaled: bool) -> Option<(u32, u32)> {
         match self {
-            Preset::EsvoScale => Some((0, 1)),
+            // 16 s a build of the kitchen's 24 frames in `all` mode.
+            Preset::SvdagTemporal if scaled => Some((0, 3)),
+            Preset::EsvoScale | Preset::EsvoBeam => Some((0, 1)),
             // 16384² light maps: about a minute per build with six faces.
             Preset::SvdagShadow => Some((0, 3)),
             _ => None,
@@ -488,7 +573,58 @@ impl RunArgs {
         out
     }
 
-    pub fn plan(&self) -> Plan {
+    /// The run's plans: one, or one per part of the paper preset.
+    pub fn plans(&self) -> Result<Vec<PartPlan>, String> {
+        if self.preset != Some(Preset::Paper) {
+            if self.full || !self.parts.is_empty() {
+                return Err("--full and --parts belong to --preset paper".into());
+            }
+            return Ok(vec![PartPlan { name: "", title: "", scaled: String::new(), plan: self.plan(false) }]);
+        }
+        // The parts' own settings are the reproductions: flags that would change them are refused.
+        let set = [
+            ("--scenes", !self.scenes.is_empty()),
+            ("--structures", !self.structures.is_empty()),
+            ("--levels", !self.levels.is_empty()),
+            ("--width", self.width.is_some()),
+            ("--height", self.height.is_some()),
+            ("--frames", self.frames.is_some()),
+            ("--workload", !self.workload.is_empty()),
+            ("--param", !self.params.is_empty()),
+            ("--contours", self.contours.is_some()),
+            ("--attributes", self.attributes.is_some()),
+            ("--beam", self.beam.is_some()),
+        ];
+        if let Some((flag, _)) = set.iter().find(|(_, given)| *given) {
+            return Err(format!(
+                "--preset paper runs each part with its own preset's settings, so {flag} does not apply; \
+                 run a part's own preset (e.g. --preset org-table1) to change them"
+            ));
+        }
+        let known: Vec<&str> = PAPER_PARTS.iter().map(|(p, _)| p.name()).collect();
+        if let Some(bad) = self.parts.iter().find(|p| !known.contains(&p.as_str())) {
+            return Err(format!(
+                "--parts: '{bad}' is not a part of the paper preset (its parts: {})",
+                known.join(", ")
+            ));
+        }
+        Ok(PAPER_PARTS
+            .iter()
+            .filter(|(p, _)| self.parts.is_empty() || self.parts.iter().any(|name| name == p.name()))
+            .map(|&(preset, title)| {
+                let args = RunArgs { preset: Some(preset), ..self.clone() };
+                let scaled = !self.full;
+                PartPlan {
+                    name: preset.name(),
+                    title,
+                    scaled: if scaled { preset.scaled_down().to_string() } else { String::new() },
+                    plan: args.plan(scaled),
+                }
+            })
+            .collect())
+    }
+
+    fn plan(&self, scaled: bool) -> Plan {
         let preset = self.preset.unwrap_or(Preset::Default);
         let (w, h) = preset.size();
         let mut backends = if self.backend.is_empty() { vec![Backend::Cpu] } else { self.backend.clone() };
@@ -518,8 +654,12 @@ impl RunArgs {
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.unwrap_or(1),
             reps: self.reps.unwrap_or(5),
-            build_warmup: self.warmup.or(preset.build_reps().map(|b| b.0)).unwrap_or(1),
-            build_reps: self.reps.or(preset.build_reps().map(|b| b.1)).unwrap_or(5),
+            build_warmup: self.warmup.or(preset.build_reps(scaled).map(|b| b.0)).unwrap_or(1),
+            build_reps: self.reps.or(preset.build_reps(scaled).map(|b| b.1)).unwrap_or(5),
+            animation_reps: (
+                self.warmup.or(preset.animation_reps(scaled).map(|a| a.0)).unwrap_or(1),
+                self.reps.or(preset.animation_reps(scaled).map(|a| a.1)).unwrap_or(5),
+            ),
             params: preset
                 .params()
                 .iter()
@@ -534,6 +674,7 @@ impl RunArgs {
                 (sizes, false) if !sizes.is_empty() => sizes,
                 _ => vec![(self.width.unwrap_or(w), self.height.unwrap_or(h))],
             },
+            scaled,
         }
     }
 }

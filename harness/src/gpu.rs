@@ -65,6 +65,7 @@ pub fn measure(
         mrays_per_s: if timing.ms_median > 0.0 { rays as f64 / (timing.ms_median * 1e3) } else { 0.0 },
         timing,
         steps_per_ray_mean: render.steps_per_ray().unwrap_or(0.0),
+        steps_p99: None,
         node_visits_per_ray_mean: 0.0,
         prim_tests_per_ray_mean: 0.0,
         hit_fraction: render.frame.hit_fraction(),

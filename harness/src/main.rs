@@ -114,5 +114,21 @@ fn list(what: ListWhat) {
         println!(
             "  esvo-scale esvo on the dragon at L = 10…14, L = 14 with LOD, L = 11 in ~100 blocks, beside bvh at 1024×1024 (about 20 min, 8 GB)"
         );
+        println!(
+            "  svdag-temporal seed 001 Tables 5–6: temporal SVDAG on kitchen-anim, robots-anim, fire-anim, 24 frames at 1024³ (about 18 min)"
+        );
+        println!(
+            "  svdag-shadow seed 001 Table 4: shadow SVDAGs of room, city, terrain at 1024³…16384³ (about 8 min, 9 GB)"
+        );
+        println!(
+            "  esvo-beam  seed 000 §5.6, §6.2: esvo with and without the beam at 2048³ on five scenes, beside bvh, at 1024×1024"
+        );
+        let (scaled, full) = cli::PAPER_MINUTES;
+        println!(
+            "  paper      every paper reproduction in one run and report, opening with the claims at a glance (about {scaled} min on 2 cores; --full: about {full} min):"
+        );
+        for (preset, title) in cli::PAPER_PARTS {
+            println!("               {:<14} {title}", preset.name());
+        }
     }
 }

@@ -23,9 +23,11 @@ pub fn merge(args: &MergeArgs, command: String) -> Result<()> {
     merged.settings.command = command;
 
     for ((tag, run), (dir, _)) in tagged.iter().zip(&inputs) {
-        for path in run.cases.iter().flat_map(|c| &c.images) {
-            let to = if run.merged.is_empty() { merged_image_path(tag, path) } else { path.clone() };
-            let (src, dst) = (dir.join(path), args.out.join(&to));
+        // Each image with its thumbnail (made again from the image where it has none).
+        let images = run.cases.iter().flat_map(|c| &c.images).flat_map(|p| [p.clone(), reports::images::thumb_path(p)]);
+        for path in images {
+            let to = if run.merged.is_empty() { merged_image_path(tag, &path) } else { path.clone() };
+            let (src, dst) = (dir.join(&path), args.out.join(&to));
             if !src.exists() {
                 continue; // The report shows a placeholder.
             }

@@ -8,15 +8,21 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use reports::html::{Shot, Shots};
+use reports::images;
 use reports::{Case, Results};
 
 pub struct RunOutput {
     pub dir: PathBuf,
     pub results: Results,
     jsonl: File,
-    /// The images already written, as data URIs for report.html: each PNG is read and encoded once.
-    images: BTreeMap<String, String>,
+    /// The images already shown, for report.html: each thumbnail is read and encoded once.
+    images: ShotCache,
 }
+
+/// Thumbnails already encoded for report.html, keyed by image path (and, for a heat map, the
+/// scale it is coloured on), so that rewriting the report after each case re-reads nothing.
+pub type ShotCache = BTreeMap<String, Shot>;
 
 impl RunOutput {
     /// Creates the run directory: `out` if given, else `results_dir/<run-id>` with
@@ -66,13 +72,22 @@ impl RunOutput {
             .truncate(true)
             .open(&jsonl_path)
             .with_context(|| format!("creating {}", jsonl_path.display()))?;
-        let mut run = Self { dir, results, jsonl, images: BTreeMap::new() };
+        let mut run = Self { dir, results, jsonl, images: ShotCache::new() };
         run.write_summary()?;
         Ok(run)
     }
 
-    pub fn images_dir(&self) -> PathBuf {
-        self.dir.join("images")
+    /// Where a case's images go: `images/`, or `images/<part>/` for a part of a many-part run
+    /// (parts render the same scene and structure at other settings); the directory on disk and
+    /// its path relative to the run directory.
+    pub fn images_dir(&self, part: Option<&str>) -> Result<(PathBuf, String)> {
+        let rel = match part {
+            Some(part) => format!("images/{part}"),
+            None => "images".to_string(),
+        };
+        let dir = self.dir.join(&rel);
+        fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        Ok((dir, rel))
     }
 
     /// Records a finished case on disk at once.
@@ -95,24 +110,131 @@ impl RunOutput {
         self.write_summary()
     }
 
-    fn write_summary(&mut self) -> Result<()> {
+    /// Rewrites results.json and the reports (after a change to `results` itself).
+    pub fn write_summary(&mut self) -> Result<()> {
         write_results(&self.dir, &self.results, &mut self.images)
     }
 }
 
-/// Writes `results.json`, `report.md` and `report.html` into `dir`. `images` caches the data URIs
-/// of the images under `dir` that the cases name; an image not on disk is left out of the page.
-pub fn write_results(dir: &Path, results: &Results, images: &mut BTreeMap<String, String>) -> Result<()> {
+/// Writes `results.json`, `report.md` and `report.html` into `dir`. `cache` holds the thumbnails
+/// already shown; an image not on disk is left out of the page.
+pub fn write_results(dir: &Path, results: &Results, cache: &mut ShotCache) -> Result<()> {
     write_atomic(&dir.join("results.json"), &serde_json::to_vec_pretty(results)?)?;
     write_atomic(&dir.join("report.md"), reports::markdown::report(results).as_bytes())?;
-    for path in results.cases.iter().flat_map(|c| &c.images) {
-        if !images.contains_key(path)
-            && let Ok(png) = fs::read(dir.join(path))
-        {
-            images.insert(path.clone(), reports::html::png_data_uri(&png));
+    let shots = shots(dir, results, cache);
+    write_atomic(&dir.join("report.html"), reports::html::report(results, &shots).as_bytes())
+}
+
+/// The page's image of every case image on disk: its thumbnail (made from the full-size file
+/// where a run predates thumbnails) and the file it links to. A heat map's thumbnail and
+/// full-size file are coloured from the raw counts on the scene's scale, drawn again only when
+/// that scale changes.
+fn shots(dir: &Path, results: &Results, cache: &mut ShotCache) -> Shots {
+    let mut shots = Shots::new();
+    for case in &results.cases {
+        for path in &case.images {
+            let scale = match path.ends_with(&format!("{}.png", images::STEPS_RAW)) {
+                true => {
+                    let workload = images::render_of(path).map_or("primary", |(_, w)| w);
+                    let scene = results.cases.iter().filter(|c| c.scene == case.scene && c.part == case.part);
+                    Some(images::heat_scale(scene, workload).unwrap_or(1))
+                }
+                false => None,
+            };
+            let key = scale.map_or_else(|| path.clone(), |s| format!("{path}@{s}"));
+            if !cache.contains_key(&key) {
+                let made = match scale {
+                    Some(scale) => heat_shot(dir, path, scale),
+                    None => picture_shot(dir, path),
+                };
+                match made {
+                    Ok(shot) => {
+                        cache.insert(key.clone(), shot);
+                    }
+                    // Shown as missing in the page; the run itself goes on.
+                    Err(e) => eprintln!("accel-bench: warning: image {path} left out of the report: {e:#}"),
+                }
+            }
+            if let Some(shot) = cache.get(&key) {
+                shots.insert(path.clone(), shot.clone());
+            }
         }
     }
-    write_atomic(&dir.join("report.html"), reports::html::report(results, images).as_bytes())
+    shots
+}
+
+/// A picture's thumbnail from `thumbs/`, made from the full-size image if it is not there.
+fn picture_shot(dir: &Path, path: &str) -> Result<Shot> {
+    let thumb = images::thumb_path(path);
+    let bytes = match fs::read(dir.join(&thumb)) {
+        Ok(bytes) => bytes,
+        Err(_) => {
+            let full = dir.join(path);
+            let (w, h, rgb) = images::read_rgb(&full).with_context(|| format!("reading {}", full.display()))?;
+            let (t, tw, th) = images::thumb_rgb(&rgb, w, h);
+            let bytes = match thumb.ends_with(".png") {
+                true => images::png_bytes(tw, th, &t),
+                false => images::jpeg_bytes(tw, th, &t),
+            }
+            .context("encoding a thumbnail")?;
+            write_new(&dir.join(&thumb), &bytes)?;
+            bytes
+        }
+    };
+    let mime = if thumb.ends_with(".png") { "image/png" } else { "image/jpeg" };
+    Ok(Shot { thumb: reports::html::data_uri(&bytes, mime), full: path.to_string() })
+}
+
+/// A heat map on `scale`: its thumbnail coloured from the raw counts' thumbnail, and the
+/// full-size map drawn under `heat/` (replacing the map of an older scale).
+fn heat_shot(dir: &Path, path: &str, scale: u32) -> Result<Shot> {
+    let full = images::heat_path(path, scale);
+    let full_file = dir.join(&full);
+    if !full_file.exists() {
+        let raw = dir.join(path);
+        let (w, h, counts) = images::read_png16(&raw).with_context(|| format!("reading {}", raw.display()))?;
+        if let Some(parent) = full_file.parent() {
+            fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+            remove_other_scales(parent, path, &full_file);
+        }
+        images::write_png(&full_file, w, h, &images::heat_image(&counts, scale))
+            .with_context(|| format!("writing {}", full_file.display()))?;
+    }
+    let thumb = dir.join(images::thumb_path(path));
+    let (tw, th, counts) = match images::read_png16(&thumb) {
+        Ok(t) => t,
+        Err(_) => {
+            let raw = dir.join(path);
+            let (w, h, counts) = images::read_png16(&raw).with_context(|| format!("reading {}", raw.display()))?;
+            let (t, tw, th) = images::thumb_counts(&counts, w, h);
+            (tw, th, t)
+        }
+    };
+    let bytes = images::jpeg_bytes(tw, th, &images::heat_image(&counts, scale)).context("encoding a thumbnail")?;
+    Ok(Shot { thumb: reports::html::data_uri(&bytes, "image/jpeg"), full })
+}
+
+/// Removes the heat maps of `path` drawn on other scales than `keep`'s.
+fn remove_other_scales(heat_dir: &Path, path: &str, keep: &Path) {
+    let any = images::heat_path(path, 0);
+    let Some(prefix) = any.rsplit_once('/').map(|(_, n)| n.trim_end_matches("0.png").to_string()) else { return };
+    let Ok(entries) = fs::read_dir(heat_dir) else { return };
+    for entry in entries.flatten() {
+        let p = entry.path();
+        let name = entry.file_name().to_string_lossy().to_string();
+        let scale = name.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".png"));
+        if p != keep && scale.is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit())) {
+            let _ = fs::remove_file(p);
+        }
+    }
+}
+
+/// Writes a file, creating its directory.
+fn write_new(path: &Path, bytes: &[u8]) -> Result<()> {
+    if let Some(parent) = path.parent() {
+        fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+    }
+    fs::write(path, bytes).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Reads a result file: `path` is a run directory holding `results.json`, or the file itself.
@@ -149,4 +271,89 @@ fn link_latest(results_dir: &Path, run_id: &str) -> Result<()> {
 #[cfg(not(unix))]
 fn link_latest(results_dir: &Path, run_id: &str) -> Result<()> {
     fs::write(results_dir.join("latest.txt"), run_id).context("writing latest.txt")
+}
+
+#[cfg(test)]
+mod tests {
+
+    use kernels::cpu::render::{self, Workload};
+    use reports::{RenderStats, Settings};
+    use scenes::Camera;
+    use structures::{BuildInput, Params};
+
+    use super::*;
+    use crate::images::{CaseImages, write_case_images};
+
+    /// A fresh directory under the system's temporary one.
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("accel-bench-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(dir.join("images")).expect("a temporary directory");
+        dir
+    }
+
+    /// The default preset's shape (DESIGN.md §7): 14 scenes × 12 structures at 512×512, every
+    /// case with a shaded image, a heat map and a difference view. One real render pair (the
+    /// dragon through `svo` at 2⁷, checked against `bvh`) goes through the run's image pipeline,
+    /// and its files stand for every case's: the page inlines one thumbnail per image, so its size
+    /// follows the cases, whatever the renders' resolution.
+    #[test]
+    fn a_default_sized_report_stays_under_10_mb_and_links_its_full_images() {
+        let scene = scenes::load_scene("dragon-11k").expect("a built-in scene");
+        let params = Params::parse(["voxel.levels=7"]).expect("params");
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let camera = Camera::new(scene.camera_spec(), 512, 512);
+        let shade = render::ShadeContext::for_scene(&scene, 1);
+        let frame_of = |name: &str| {
+            let accel = kernels::build_structure(name, &input).expect("known").expect("builds");
+            render::render_counted(accel.as_ref(), &camera, &shade, Workload::Primary)
+        };
+        let (reference, _) = frame_of("bvh");
+        let (frame, counters) = frame_of("svo");
+        let steps: Vec<f32> = frame.pixels().map(|(x, y, _)| counters.at(&frame, x, y).steps as f32).collect();
+        let dir = temp_dir("report-size");
+        let what = CaseImages { frame: &frame, steps: &steps, reference: Some(&reference) };
+        let first = write_case_images(&dir.join("images"), "images", "s0__x__cpu__primary", what, |_| None)
+            .expect("the images are written");
+        assert_eq!(first.len(), 3, "shaded, steps and differences: {first:?}");
+        let mut results =
+            Results { settings: Settings { preset: "default".into(), ..Settings::default() }, ..Results::default() };
+        for s in 0..14 {
+            for k in 0..12 {
+                let stem = format!("s{s}__x{k}__cpu__primary");
+                let images: Vec<String> = first.iter().map(|p| p.replace("s0__x__cpu__primary", &stem)).collect();
+                for (from, to) in first.iter().zip(&images) {
+                    for (a, b) in [(from.clone(), to.clone()), (images::thumb_path(from), images::thumb_path(to))] {
+                        fs::copy(dir.join(&a), dir.join(&b)).expect("a copy");
+                    }
+                }
+                results.cases.push(Case {
+                    scene: format!("s{s}"),
+                    structure: format!("x{k}"),
+                    images,
+                    render: vec![RenderStats {
+                        backend: "cpu".into(),
+                        workload: "primary".into(),
+                        // Structures of a scene with different step counts share the scene's scale.
+                        steps_p99: Some(10.0 + 3.0 * k as f64),
+                        ..RenderStats::default()
+                    }],
+                    ..Case::default()
+                });
+            }
+        }
+        write_results(&dir, &results, &mut ShotCache::new()).expect("the report is written");
+        let page = fs::read_to_string(dir.join("report.html")).expect("report.html");
+        assert!(page.len() <= 10 << 20, "report.html is {} bytes", page.len());
+        assert_eq!(page.matches("src=\"data:image/").count(), 3 * 14 * 12, "every thumbnail inline");
+        // Each full-size image is a file beside the report; heat maps on the scene's scale.
+        for (i, _) in page.match_indices("<a href=\"images/") {
+            let target = page[i + 9..].split('"').next().expect("a link");
+            assert!(dir.join(target).is_file(), "{target} is not beside the report");
+        }
+        let scale = images::nice_scale(10.0 + 3.0 * 11.0);
+        assert!(page.contains(&format!("to {scale} steps (primary rays)")), "the shared scale's legend");
+        assert!(dir.join(format!("images/heat/s3__x0__cpu__primary__steps-{scale}.png")).is_file());
+        let _ = fs::remove_dir_all(&dir);
+    }
 }

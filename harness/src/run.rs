@@ -20,7 +20,7 @@ use structures::{BuildInput, Params};
 use crate::agreement;
 use crate::alloc;
 use crate::budget::{self, Budget, BudgetError};
-use crate::cli::{Backend, Plan, RunArgs};
+use crate::cli::{Backend, PartPlan, Plan, RunArgs};
 use crate::gpu;
 use crate::images;
 use crate::machine;
@@ -32,125 +32,125 @@ const REFERENCE: &str = reports::compare::REFERENCE;
 
 pub fn run(args: &RunArgs, command: String) -> Result<()> {
     check_optimised(args.allow_unoptimized)?;
-    let plan = args.plan();
-    validate(&plan)?;
-    let gpu = if plan.backends.contains(&Backend::Gpu) { Some(gpu::context()?) } else { None };
-    let params = Params::parse(plan.params.iter().map(String::as_str))?;
+    let parts = args.plans().map_err(|e| anyhow::anyhow!(e))?;
     // Only the user's own keys: a preset's (e.g. voxel.levels) are not the user's to misspell.
     let given = Params::parse(args.params.iter().map(String::as_str))?;
-    let in_run: Vec<&str> = plan.structures.iter().map(String::as_str).collect();
-    for warning in given.check_keys(&kernels::param_keys(), &in_run)? {
-        eprintln!("accel-bench: warning: {warning}");
-    }
-    // Every case's parameter values, before the first build: a bad value is a usage error.
-    for structure in &plan.structures {
-        let check = kernels::structure_check(structure).context("validated above")?;
-        for (p, _) in variants(&plan, &params, structure) {
-            check(&p).with_context(|| format!("structure '{structure}'"))?;
+    let mut prepared: Vec<(&PartPlan, Params)> = Vec::new();
+    for part in &parts {
+        let plan = &part.plan;
+        validate(plan)?;
+        let params = Params::parse(plan.params.iter().map(String::as_str))?;
+        let in_run: Vec<&str> = plan.structures.iter().map(String::as_str).collect();
+        for warning in given.check_keys(&kernels::param_keys(), &in_run)? {
+            eprintln!("accel-bench: warning: {warning}");
         }
+        // Every case's parameter values, before the first build: a bad value is a usage error.
+        for structure in &plan.structures {
+            let check = kernels::structure_check(structure).context("validated above")?;
+            for (p, _) in variants(plan, &params, structure) {
+                check(&p).with_context(|| format!("structure '{structure}'"))?;
+            }
+        }
+        prepared.push((part, params));
     }
+    let gpu = match parts.iter().any(|p| p.plan.backends.contains(&Backend::Gpu)) {
+        true => Some(gpu::context()?),
+        false => None,
+    };
     let budget = Budget::new(args.memory_limit);
-    let pixels = u64::from(plan.width) * u64::from(plan.height);
-    if pixels > u64::from(u32::MAX) {
-        bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
+    for part in &parts {
+        let (width, height) = (part.plan.width, part.plan.height);
+        let pixels = u64::from(width) * u64::from(height);
+        if pixels > u64::from(u32::MAX) {
+            bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
+        }
+        budget.check(
+            format!("a {width}×{height} frame"),
+            budget::frame_bytes(width, height),
+            "a smaller --width/--height",
+        )?;
     }
-    budget.check(
-        format!("a {}×{} frame", plan.width, plan.height),
-        budget::frame_bytes(plan.width, plan.height),
-        "a smaller --width/--height",
-    )?;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
 
     let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
     let run_id = created.replace(['-', ':'], "").replace('T', "-").trim_end_matches('Z').to_string();
+    let many = args.preset == Some(crate::cli::Preset::Paper);
+    let part_records = match many {
+        true => prepared
+            .iter()
+            .map(|(part, params)| reports::Part {
+                name: part.name.into(),
+                title: part.title.into(),
+                scaled: part.scaled.clone(),
+                settings: settings(&part.plan, params, command.clone()),
+                wall_s: 0.0,
+            })
+            .collect(),
+        false => Vec::new(),
+    };
+    let (first, first_params) = prepared.first().context("a run has a plan")?;
+    let mut top = settings(&first.plan, first_params, command);
+    if many {
+        // The run's own record: the preset and what its parts cover together.
+        top.preset = crate::cli::Preset::Paper.name().into();
+        top.scenes = union(parts.iter().flat_map(|p| &p.plan.scenes));
+        top.structures = union(parts.iter().flat_map(|p| &p.plan.structures));
+        top.params.clear();
+    }
     let results = Results {
         schema: reports::SCHEMA.into(),
         run_id,
         created,
         machine: machine::machine(),
         git: machine::git(),
-        settings: settings(&plan, &params, command),
+        settings: top,
         cases: Vec::new(),
         merged: Vec::new(),
+        parts: part_records,
         skipped: Vec::new(),
     };
     let mut out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
     eprintln!("accel-bench: writing {}", out.dir.display());
+    if many {
+        let (scaled, full) = crate::cli::PAPER_MINUTES;
+        let minutes = if args.full { full } else { scaled };
+        eprintln!(
+            "accel-bench: --preset paper: {} parts, about {minutes} minutes on 2 cores{}",
+            parts.len(),
+            if args.full { " (full size)" } else { " (scaled down; --full for full size)" }
+        );
+    }
 
-    let cases = plan.scenes.len() as u64
-        * plan.structures.iter().map(|s| variants(&plan, &params, s).len() as u64).sum::<u64>();
+    let cases: u64 = prepared
+        .iter()
+        .map(|(part, params)| {
+            let plan = &part.plan;
+            plan.scenes.len() as u64
+                * plan.structures.iter().map(|s| variants(plan, params, s).len() as u64).sum::<u64>()
+        })
+        .sum();
     let bar = ProgressBar::new(cases).with_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases  {wide_msg}")
             .context("progress template")?,
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let started = Instant::now();
-    pool.install(|| -> Result<()> {
-        for scene_name in &plan.scenes {
-            let matrix: Vec<(&String, Params, Option<String>)> = plan
-                .structures
-                .iter()
-                .flat_map(|s| variants(&plan, &params, s).into_iter().map(move |(p, v)| (s, p, v)))
-                .collect();
-            bar.set_message(format!("{scene_name}: loading"));
-            let t = Instant::now();
-            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, &budget, plan.frames))
-                .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))));
-            let scene = match loaded {
-                Ok(scene) => scene,
-                Err(e) => {
-                    let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "scene" };
-                    let reason = format!("{e:#}");
-                    bar.suspend(|| eprintln!("  {scene_name}: skipped ({} cases): {reason}", matrix.len()));
-                    for (structure, _, variant) in matrix {
-                        out.push_skipped(skipped(scene_name, structure, variant, kind, &reason))?;
-                        bar.inc(1);
-                    }
-                    continue;
-                }
-            };
-            let load_ms = ms_since(t);
-            let mut ctx = SceneRun::new(&scene, load_ms, gpu);
-            for (structure, params, variant) in matrix {
-                // One case's failure, a panic included, costs that case alone: it is listed with
-                // its reason and the matrix goes on.
-                let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    if kernels::find_query_structure(structure).is_some() {
-                        let level = params.get("voxel.levels", 10u32).unwrap_or(10);
-                        let compare = plan.shadow_compare_level.is_none_or(|l| l == level);
-                        let input = shadows::ShadowCaseInput {
-                            input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params: &params },
-                            structure,
-                            variant: variant.clone(),
-                            load_ms: ctx.load_ms,
-                            degenerate: ctx.degenerate,
-                        };
-                        return shadows::measure(input, &plan, &bar, &budget, compare);
-                    }
-                    measure_case(&mut ctx, structure, &params, variant.clone(), &plan, args, &out, &bar, &budget)
-                }));
-                match attempt {
-                    Ok(Ok(case)) => {
-                        bar.suspend(|| eprintln!("{}", one_line(&case)));
-                        out.push_case(case)?;
-                    }
-                    Ok(Err(e)) => {
-                        let kind = failure_kind(&e);
-                        let reason = format!("{e:#}");
-                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
-                        out.push_skipped(skipped(scene_name, structure, variant, kind, &reason))?;
-                    }
-                    Err(panic) => {
-                        let reason = format!("panicked: {}", panic_message(panic.as_ref()));
-                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
-                        out.push_skipped(skipped(scene_name, structure, variant, "panic", &reason))?;
-                    }
-                }
-                bar.inc(1);
-            }
+    for (i, (part, params)) in prepared.iter().enumerate() {
+        let t = Instant::now();
+        let name = many.then_some(part.name);
+        if let Some(name) = name {
+            bar.suspend(|| eprintln!("accel-bench: part {}/{}: {name} — {}", i + 1, prepared.len(), part.title));
         }
-        Ok(())
-    })?;
+        let mut matrix =
+            Matrix { plan: &part.plan, params, part: name, args, out: &mut out, bar: &bar, budget: &budget, gpu };
+        matrix.run()?;
+        if many {
+            out.results.parts[i].wall_s = t.elapsed().as_secs_f64();
+            out.write_summary()?;
+            bar.suspend(|| {
+                eprintln!("accel-bench: part {} took {:.1} min", part.name, t.elapsed().as_secs_f64() / 60.0)
+            });
+        }
+    }
     bar.finish_and_clear();
     eprintln!(
         "accel-bench: {} cases in {:.1} s; results in {}",
@@ -172,6 +172,117 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         bail!("{failed} cases failed (listed above, in results.json's `skipped` and in the report)");
     }
     Ok(())
+}
+
+/// Names in first-seen order, each once.
+fn union<'a>(names: impl Iterator<Item = &'a String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for n in names {
+        if !out.contains(n) {
+            out.push(n.clone());
+        }
+    }
+    out
+}
+
+/// One plan's matrix (a run's, or one part's of a many-part run) and where its cases go.
+struct Matrix<'a> {
+    plan: &'a Plan,
+    params: &'a Params,
+    /// The part of a many-part run: its cases carry it, its images go under `images/<part>/`.
+    part: Option<&'static str>,
+    args: &'a RunArgs,
+    out: &'a mut RunOutput,
+    bar: &'a ProgressBar,
+    budget: &'a Budget,
+    gpu: Option<&'static GpuContext>,
+}
+
+impl Matrix<'_> {
+    fn run(&mut self) -> Result<()> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(self.plan.threads)
+            .build()
+            .context("starting worker threads")?;
+        pool.install(|| self.scenes())
+    }
+
+    fn skip(&mut self, scene: &str, structure: &str, variant: Option<String>, kind: &str, reason: &str) -> Result<()> {
+        let mut k = skipped(scene, structure, variant, kind, reason);
+        k.part = self.part.map(String::from);
+        self.out.push_skipped(k)
+    }
+
+    fn scenes(&mut self) -> Result<()> {
+        let (plan, params, bar, budget) = (self.plan, self.params, self.bar, self.budget);
+        for scene_name in &plan.scenes {
+            let matrix: Vec<(&String, Params, Option<String>)> = plan
+                .structures
+                .iter()
+                .flat_map(|s| variants(plan, params, s).into_iter().map(move |(p, v)| (s, p, v)))
+                .collect();
+            bar.set_message(format!("{scene_name}: loading"));
+            let t = Instant::now();
+            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, budget, plan.frames))
+                .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))));
+            let scene = match loaded {
+                Ok(scene) => scene,
+                Err(e) => {
+                    let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "scene" };
+                    let reason = format!("{e:#}");
+                    bar.suspend(|| eprintln!("  {scene_name}: skipped ({} cases): {reason}", matrix.len()));
+                    for (structure, _, variant) in matrix {
+                        self.skip(scene_name, structure, variant, kind, &reason)?;
+                        bar.inc(1);
+                    }
+                    continue;
+                }
+            };
+            let load_ms = ms_since(t);
+            let mut ctx = SceneRun::new(&scene, load_ms, self.gpu);
+            for (structure, params, variant) in matrix {
+                // One case's failure, a panic included, costs that case alone: it is listed with
+                // its reason and the matrix goes on.
+                let (args, out, part) = (self.args, &*self.out, self.part);
+                let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    if kernels::find_query_structure(structure).is_some() {
+                        let level = params.get("voxel.levels", 10u32).unwrap_or(10);
+                        let compare = plan.shadow_compare_level.is_none_or(|l| l == level);
+                        let input = shadows::ShadowCaseInput {
+                            input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params: &params },
+                            structure,
+                            variant: variant.clone(),
+                            load_ms: ctx.load_ms,
+                            degenerate: ctx.degenerate,
+                        };
+                        return shadows::measure(input, plan, bar, budget, compare);
+                    }
+                    let case = CaseRun { structure, params: &params, variant: variant.clone(), plan, args, out, part };
+                    measure_case(&mut ctx, case, bar, budget)
+                }));
+                match attempt {
+                    Ok(Ok(mut case)) => {
+                        case.part = self.part.map(String::from);
+                        bar.suspend(|| eprintln!("{}", one_line(&case)));
+                        self.out.push_case(case)?;
+                    }
+                    Ok(Err(e)) => {
+                        let kind = failure_kind(&e);
+                        let reason = format!("{e:#}");
+                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
+                        self.skip(scene_name, structure, variant, kind, &reason)?;
+                    }
+                    Err(panic) => {
+                        let reason = format!("panicked: {}", panic_message(panic.as_ref()));
+                        bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
+                        self.skip(scene_name, structure, variant, "panic", &reason)?;
+                    }
+                }
+                bar.inc(1);
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Loads a scene within the budget: a scene whose name gives its size is checked before it is
@@ -213,7 +324,14 @@ fn failure_kind(e: &anyhow::Error) -> &'static str {
 }
 
 fn skipped(scene: &str, structure: &str, variant: Option<String>, kind: &str, reason: &str) -> SkippedCase {
-    SkippedCase { scene: scene.into(), structure: structure.into(), variant, kind: kind.into(), reason: reason.into() }
+    SkippedCase {
+        scene: scene.into(),
+        structure: structure.into(),
+        variant,
+        kind: kind.into(),
+        reason: reason.into(),
+        part: None,
+    }
 }
 
 fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
@@ -231,7 +349,7 @@ fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Optio
     if voxel && !plan.levels.is_empty() {
         return plan.levels.iter().map(|&l| (params.with("voxel.levels", l), None)).collect();
     }
-    let sweep = plan.preset.sweep(structure);
+    let sweep = plan.preset.sweep(structure, plan.scaled);
     if sweep.is_empty() {
         return vec![(params.clone(), None)];
     }
@@ -332,18 +450,20 @@ impl<'a> SceneRun<'a> {
     }
 }
 
-#[allow(clippy::too_many_arguments)] // one case of the matrix and where it goes
-fn measure_case(
-    ctx: &mut SceneRun,
-    structure: &str,
-    params: &Params,
+/// One case of the matrix and where it goes.
+struct CaseRun<'a> {
+    structure: &'a str,
+    params: &'a Params,
     variant: Option<String>,
-    plan: &Plan,
-    args: &RunArgs,
-    out: &RunOutput,
-    bar: &ProgressBar,
-    budget: &Budget,
-) -> Result<Case> {
+    plan: &'a Plan,
+    args: &'a RunArgs,
+    out: &'a RunOutput,
+    /// The part of a many-part run, whose images go under `images/<part>/`.
+    part: Option<&'a str>,
+}
+
+fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Budget) -> Result<Case> {
+    let CaseRun { structure, params, variant, plan, args, out, part } = run;
     let entry = kernels::find_structure(structure).context("unknown structure")?;
     (entry.available)().map_err(|detail| structures::BuildError::Unavailable { structure: entry.name, detail })?;
     let scene = ctx.scene;
@@ -396,6 +516,7 @@ fn measure_case(
         render: Vec::new(),
         images: Vec::new(),
         machine: None,
+        part: None,
         skipped: Vec::new(),
         animation: Vec::new(),
         shadow: Vec::new(),
@@ -437,6 +558,9 @@ fn measure_case(
             let base = alloc::reset_peak();
             let (mut stats, frame, heat) =
                 timed_renders(accel.as_ref(), reference, &camera, &shade, workload, plan, device);
+            if stats.counts_steps() {
+                stats.steps_p99 = Some(reports::images::percentile_99(&heat));
+            }
             if workload == Workload::Primary {
                 bar.set_message(format!("{}/{structure}: checking against the reference", scene.name));
                 stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
@@ -452,9 +576,16 @@ fn measure_case(
                 }
                 let stem = format!("{}__{label}__{}__{}", scene.name, backend_name(backend), workload.name());
                 // No step heat map where the kernel does not count steps (a library's traversal).
-                let heat = if stats.counts_steps() { heat.as_slice() } else { &[] };
+                let steps = if stats.counts_steps() { heat.as_slice() } else { &[] };
+                // The difference view: primary hits against the reference's, as agreement counts them.
+                let reference = match (workload, structure == REFERENCE) {
+                    (Workload::Primary, false) => ctx.reference_frame.as_ref(),
+                    _ => None,
+                };
                 let post = |rgb: &[u8]| accel.post_filter(&camera, &frame, rgb);
-                case.images.extend(images::write_case_images(&out.images_dir(), &stem, &frame, heat, post)?);
+                let (dir, rel) = out.images_dir(part)?;
+                let what = images::CaseImages { frame: &frame, steps, reference };
+                case.images.extend(images::write_case_images(&dir, &rel, &stem, what, post)?);
             }
             if workload == Workload::Primary {
                 if structure == REFERENCE && ctx.reference_frame.is_none() {
@@ -500,7 +631,8 @@ fn timed_animation(
     let mut own = Frame::new(width, height);
     let mut samples = Vec::new();
     let mut hit_fractions = 0.0;
-    for i in 0..plan.warmup + plan.reps.max(1) {
+    let (warmup, reps) = plan.animation_reps;
+    for i in 0..warmup + reps.max(1) {
         let t = Instant::now();
         for view in &frames {
             render::render_into(view.as_ref(), &camera, shade, Workload::Primary, &mut own);
@@ -508,7 +640,7 @@ fn timed_animation(
                 hit_fractions += own.hit_fraction();
             }
         }
-        if i >= plan.warmup {
+        if i >= warmup {
             samples.push(ms_since(t) / frames.len() as f64);
         }
     }
@@ -633,6 +765,7 @@ fn timed_renders(
         mrays_per_s: if timing.ms_median > 0.0 { frame.rays as f64 / (timing.ms_median * 1e3) } else { 0.0 },
         timing,
         steps_per_ray_mean: totals.steps as f64 / rays,
+        steps_p99: None,
         node_visits_per_ray_mean: totals.node_visits as f64 / rays,
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),

@@ -61,13 +61,25 @@ fn a_run_writes_results_report_and_images() {
     assert!(report.contains("## teapot") && report.contains("## flat"));
     let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
     assert!(html.contains("<h2>teapot</h2>") && html.contains("<svg"));
-    assert_eq!(html.matches("src=\"data:image/png;base64,").count(), 8, "2 scenes × 2 workloads × 2 images");
+    // Shaded images and heat maps as inline thumbnails (the reference has no difference view).
+    assert_eq!(html.matches("src=\"data:image/jpeg;base64,").count(), 8, "2 scenes × 2 workloads × 2 images");
     assert!(!html.contains("http://") && !html.contains("https://"));
     for case in cases {
-        for img in case["images"].as_array().expect("images") {
-            let path = out.join(img.as_str().expect("path"));
+        let images = case["images"].as_array().expect("images");
+        assert_eq!(images.len(), 4, "shaded and raw steps for each workload: {images:?}");
+        for img in images {
+            let img = img.as_str().expect("path");
+            let path = out.join(img);
             let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             assert!(bytes.starts_with(b"\x89PNG"), "{} is not a PNG", path.display());
+            let thumb = out.join(reports::images::thumb_path(img));
+            assert!(thumb.is_file(), "{} has no thumbnail", path.display());
+            // Each is linked from the page; a heat map through its copy on the scene's scale.
+            let linked = match img.strip_suffix("__steps16.png") {
+                Some(stem) => html.contains(&format!("href=\"{}", stem.replace("images/", "images/heat/"))),
+                None => html.contains(&format!("href=\"{img}\"")),
+            };
+            assert!(linked, "{img} is not linked from report.html");
         }
     }
     let _ = std::fs::remove_dir_all(&out);
@@ -92,6 +104,21 @@ fn a_bad_scene_is_skipped_with_its_error_and_the_run_goes_on() {
     assert_eq!((skipped["kind"].as_str(), skipped["structure"].as_str()), (Some("scene"), Some("bvh")), "{results}");
     assert!(skipped["reason"].as_str().is_some_and(|r| r.contains("line 4")), "{skipped}");
     let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn the_paper_preset_refuses_flags_that_would_change_its_parts() {
+    for (args, want) in [
+        (&["run", "--preset", "paper", "--scenes", "bunny"][..], "--scenes does not apply"),
+        (&["run", "--preset", "paper", "--param", "org.lambda=2"][..], "--param does not apply"),
+        (&["run", "--preset", "paper", "--parts", "org-fig9"][..], "'org-fig9' is not a part of the paper preset"),
+        (&["run", "--preset", "quick", "--full"][..], "belong to --preset paper"),
+    ] {
+        let o = harness(args);
+        assert!(!o.status.success(), "{args:?} ran");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(stderr.contains(want), "{args:?}: {stderr}");
+    }
 }
 
 #[test]

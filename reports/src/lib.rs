@@ -2,6 +2,8 @@
 //! report writers; the Markdown and self-contained HTML reports with their plots, scaling studies
 //! and paper reproductions; PNG images; and the pure logic of `harness compare` and `harness merge`.
 
+pub mod chapters;
+pub mod claims;
 pub mod compare;
 pub mod gpu;
 pub mod html;

@@ -3,6 +3,7 @@
 
 use std::fmt::Write;
 
+use crate::chapters;
 use crate::merge;
 use crate::references;
 use crate::scaling::{self, Axis};
@@ -81,17 +82,28 @@ pub fn report(results: &Results) -> String {
          is kernel time alone (upload listed under the table), steps only are counted, and agreement is \
          with the same structure's CPU kernel.\n"
     );
+    let chapters = chapters::chapters(results);
+    out.push_str(&chapters::glance(&chapters));
     out.push_str(&not_run_section(results));
-    for (tag, view) in &views {
-        let section = crate::paper::section(view);
-        if let (Some(tag), false) = (tag, section.is_empty()) {
-            let _ = writeln!(out, "Machine **{tag}**:\n");
+    for chapter in &chapters {
+        let mut body = String::new();
+        for (tag, md) in &chapter.reproductions {
+            if let Some(tag) = tag {
+                let _ = writeln!(body, "Machine **{tag}**:\n");
+            }
+            body.push_str(md);
         }
-        out.push_str(&section);
-    }
-    scaling_section(&mut out, results);
-    for scene in results.scenes() {
-        scene_section(&mut out, &results.scene_cases(scene));
+        scaling_section(&mut body, &chapter.results);
+        for scene in chapter.results.scenes() {
+            scene_section(&mut body, &chapter.results.scene_cases(scene));
+        }
+        match (&chapter.part, chapter.summary()) {
+            (Some(part), Some(summary)) => {
+                let _ = writeln!(out, "## {} (`--preset {}`)\n\n{summary}\n", part.title, part.name);
+                out.push_str(&chapters::demote(&body));
+            }
+            _ => out.push_str(&body),
+        }
     }
     out
 }

@@ -50,9 +50,16 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         settings: first.settings.clone(),
         cases: Vec::new(),
         merged: Vec::new(),
+        parts: Vec::new(),
         skipped: Vec::new(),
     };
     for (tag, run) in runs {
+        // The parts of many-part runs, each name once (a case names its part, not its run's).
+        for part in &run.parts {
+            if !merged.parts.iter().any(|p| p.name == part.name) {
+                merged.parts.push(part.clone());
+            }
+        }
         if run.schema != SCHEMA {
             return Err(MergeError::Schema { run_id: run.run_id.clone(), schema: run.schema.clone() });
         }
@@ -130,6 +137,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 settings: m.settings.clone(),
                 cases: results.cases.iter().filter(|c| c.machine.as_deref() == Some(&m.tag)).cloned().collect(),
                 merged: Vec::new(),
+                parts: Vec::new(),
                 skipped: Vec::new(),
             };
             (Some(m.tag.clone()), view)

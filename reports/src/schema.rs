@@ -21,6 +21,10 @@ pub struct Results {
     /// each case names its run in [`Case::machine`]. Empty for a single run.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub merged: Vec<MergedRun>,
+    /// A run of many parts (the `paper` preset): each part one reproduction's own preset with its
+    /// own settings; each case names its part in [`Case::part`]. Empty for a run of one preset.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub parts: Vec<Part>,
     /// Cases of the matrix that did not run: refused for their memory budget, a scene that did
     /// not load, a build that failed. The run went on without them.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -38,6 +42,24 @@ pub struct SkippedCase {
     /// or a render failed) or `panic`.
     pub kind: String,
     pub reason: String,
+    /// The part of a many-part run the case belongs to.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub part: Option<String>,
+}
+
+/// One part of a many-part run: a preset run with its own settings inside the run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Part {
+    /// The part's preset, e.g. `org-fig1`; its cases' [`Case::part`].
+    pub name: String,
+    /// What it reproduces, e.g. `seed 002 Fig. 1: Eq. 1 vs Algorithm 2 on grass`.
+    pub title: String,
+    /// How the part was scaled down from its preset's full size (empty: full size).
+    #[serde(skip_serializing_if = "String::is_empty", default)]
+    pub scaled: String,
+    pub settings: Settings,
+    /// Wall time of the part, seconds; 0 while it runs.
+    pub wall_s: f64,
 }
 
 /// One of the runs a merged result file combines, under the tag its cases carry.
@@ -180,6 +202,9 @@ pub struct Case {
     /// The machine tag of a merged result file (see [`Results::merged`]); `None` in a single run.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub machine: Option<String>,
+    /// The part of a many-part run (see [`Results::parts`]); `None` in a run of one preset.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub part: Option<String>,
     /// Renders of the matrix this case did not run, and why (a structure without a GPU kernel,
     /// a workload the GPU backend does not run).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -287,6 +312,33 @@ impl Results {
         scenes
     }
 
+    /// The part of a many-part run as a run of its own: its cases, skipped cases and settings.
+    pub fn part_view(&self, part: &Part) -> Results {
+        Results {
+            settings: part.settings.clone(),
+            cases: self.cases.iter().filter(|c| c.part.as_deref() == Some(&part.name)).cloned().collect(),
+            skipped: self.skipped.iter().filter(|k| k.part.as_deref() == Some(&part.name)).cloned().collect(),
+            parts: Vec::new(),
+            ..self.clone_header()
+        }
+    }
+
+    /// Everything but the cases, skipped cases and parts.
+    fn clone_header(&self) -> Results {
+        Results {
+            schema: self.schema.clone(),
+            run_id: self.run_id.clone(),
+            created: self.created.clone(),
+            machine: self.machine.clone(),
+            git: self.git.clone(),
+            settings: self.settings.clone(),
+            cases: Vec::new(),
+            merged: self.merged.clone(),
+            parts: Vec::new(),
+            skipped: Vec::new(),
+        }
+    }
+
     /// The cases of one scene, in run order.
     pub fn scene_cases(&self, scene: &str) -> Vec<&Case> {
         self.cases.iter().filter(|c| c.scene == scene).collect()
@@ -371,6 +423,10 @@ pub struct RenderStats {
     /// Rays per second over the median repetition, in millions.
     pub mrays_per_s: f64,
     pub steps_per_ray_mean: f64,
+    /// The 99th percentile of steps per pixel in the counting pass (CPU rows): where the report's
+    /// heat maps of the scene end (the largest among its structures).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps_p99: Option<f64>,
     pub node_visits_per_ray_mean: f64,
     pub prim_tests_per_ray_mean: f64,
     pub hit_fraction: f64,

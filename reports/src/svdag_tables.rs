@@ -8,7 +8,8 @@
 
 use std::fmt::Write;
 
-use crate::paper::{cpu_render_ms, held};
+use crate::claims::{Check, Sheet};
+use crate::paper::cpu_render_ms;
 use crate::schema::{Case, Results};
 
 /// SVO / SVDAG node ratio the paper's abstract range starts at (1/11 … 1/135).
@@ -77,12 +78,13 @@ fn e4(x: u64) -> String {
 }
 
 /// The section, for a run with `svdag` cases (empty otherwise).
-pub fn section(results: &Results) -> String {
+pub fn section(results: &Results) -> Sheet {
+    let mut out = Sheet::default();
     if !results.cases.iter().any(|c| c.structure == "svdag") {
-        return String::new();
+        return out;
     }
     let scenes = results.scenes();
-    let mut out = String::from("## Seed 001 — SVDAG against SVO and ESVO (Tables 1–3, Fig. 13)\n\n");
+    out.push_str("## Seed 001 — SVDAG against SVO and ESVO (Tables 1–3, Fig. 13)\n\n");
     out.push_str(
         "The paper's resolutions are 1000³ and 2000³, ours 1024³ and 2048³; its SVDAG has the seed's 1-bit \
          leaves (`svdag [bits]`); Kämpe's 4³ bricks (`svdag [bricks]`) are shown beside it. Paper rows are \
@@ -96,7 +98,7 @@ pub fn section(results: &Results) -> String {
     out
 }
 
-fn table1(out: &mut String, results: &Results, scenes: &[&str]) {
+fn table1(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     let _ = writeln!(out, "### Table 1 — nodes and pointers at 1024³ (×10⁴)\n");
     out.push_str(
         "Nodes: SVO and ESVO count their interior voxels (the nodes they store), SVDAG its unique nodes; \
@@ -139,16 +141,19 @@ fn table1(out: &mut String, results: &Results, scenes: &[&str]) {
     }
     let _ = writeln!(out);
     for (scene, ratio) in claims {
-        let _ = writeln!(
-            out,
-            "- {scene}: SVDAG holds 1/{ratio:.0} of the SVO's nodes; the paper reports 1/11 … 1/135 (at least {NODE_RATIO_MIN}×): {}",
-            held(ratio >= NODE_RATIO_MIN)
-        );
+        out.claim(Check {
+            source: "seed 001 Table 1",
+            claim: format!("SVDAG holds at most 1/{NODE_RATIO_MIN} of the SVO's nodes"),
+            subject: format!("{scene} at 1024³"),
+            expected: "1/11 … 1/135".into(),
+            ours: format!("1/{ratio:.0}"),
+            held: ratio >= NODE_RATIO_MIN,
+        });
     }
     let _ = writeln!(out);
 }
 
-fn table2(out: &mut String, results: &Results, scenes: &[&str]) {
+fn table2(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     let _ = writeln!(out, "### Table 2 — storage in MB (10⁶ bytes)\n");
     out.push_str(
         "| scene | resolution | SVO | ESVO | SVDAG | SVDAG [bricks] | paper SVO | paper ESVO | paper SVDAG |\n",
@@ -179,23 +184,25 @@ fn table2(out: &mut String, results: &Results, scenes: &[&str]) {
                 p(2),
             );
             if let (Some(e), Some(d)) = (esvo, bits) {
-                claims.push((scene, level, d.memory.bytes < e.memory.bytes));
+                claims.push((scene, level, d.memory.bytes as f64 / e.memory.bytes.max(1) as f64));
             }
         }
     }
     let _ = writeln!(out);
-    for (scene, level, ok) in claims {
-        let _ = writeln!(
-            out,
-            "- {scene} at {}³: SVDAG smaller than ESVO (the paper: 明显优于 ESVO): {}",
-            1u32 << level,
-            held(ok)
-        );
+    for (scene, level, ratio) in claims {
+        out.claim(Check {
+            source: "seed 001 Table 2",
+            claim: "SVDAG is smaller than ESVO".into(),
+            subject: format!("{scene} at {}³", 1u32 << level),
+            expected: "smaller (明显优于 ESVO)".into(),
+            ours: format!("{ratio:.2}× ESVO's bytes"),
+            held: ratio < 1.0,
+        });
     }
     let _ = writeln!(out);
 }
 
-fn table3(out: &mut String, results: &Results, scenes: &[&str]) {
+fn table3(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     let _ = writeln!(out, "### Table 3 — SVO → SVDAG time t_A in ms\n");
     out.push_str(
         "Ours: `params.svdag.stats.reduce_ms` of the last timed build, the merge alone from the canonical \
@@ -240,7 +247,7 @@ fn last_growth(values: &[Option<f64>]) -> String {
     }
 }
 
-fn growth(out: &mut String, results: &Results, scenes: &[&str]) {
+fn growth(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     let _ = writeln!(out, "### SVDAG storage by resolution, and growth per doubling\n");
     let heads: Vec<String> = TIME_LEVELS.iter().map(|l| format!("{}³ MB", 1u32 << l)).collect();
     let _ = writeln!(out, "| scene | structure | {} | growth per doubling |", heads.join(" | "));
@@ -270,16 +277,19 @@ fn growth(out: &mut String, results: &Results, scenes: &[&str]) {
     }
     let _ = writeln!(out);
     for (scene, label, g) in claims {
-        let _ = writeln!(
-            out,
-            "- {scene} {label}: storage grows {g:.2}× over the last doubling; Kämpe et al. report 2.6–2.8× (at most {GROWTH_MAX}×), an SVO 4×: {}",
-            held(g <= GROWTH_MAX)
-        );
+        out.claim(Check {
+            source: "seed 001 Table 2",
+            claim: format!("SVDAG storage grows at most {GROWTH_MAX}× per doubling (an SVO 4×)"),
+            subject: format!("{scene} {label}"),
+            expected: "2.6–2.8× (Kämpe et al.)".into(),
+            ours: format!("{g:.2}×"),
+            held: g <= GROWTH_MAX,
+        });
     }
     let _ = writeln!(out);
 }
 
-fn fig13(out: &mut String, results: &Results, scenes: &[&str]) {
+fn fig13(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     let _ = writeln!(out, "### Fig. 13 — primary-ray time per structure at 1024³\n");
     out.push_str(
         "CPU render time of the run's primary rays (ms per frame, median) and traversal steps per ray. The \
@@ -311,12 +321,18 @@ fn fig13(out: &mut String, results: &Results, scenes: &[&str]) {
             steps(esvo),
             steps(bits)
         );
-        claims.push((scene, d / s <= RAYS_NOT_SLOWER && d / e <= RAYS_NOT_SLOWER));
+        claims.push((scene, d / s, d / e));
     }
     let _ = writeln!(out);
-    for (scene, ok) in claims {
-        let _ =
-            writeln!(out, "- {scene}: SVDAG's ray time no more than {RAYS_NOT_SLOWER}× SVO's and ESVO's: {}", held(ok));
+    for (scene, vs_svo, vs_esvo) in claims {
+        out.claim(Check {
+            source: "seed 001 Fig. 13",
+            claim: format!("SVDAG's ray time is at most {RAYS_NOT_SLOWER}× SVO's and ESVO's"),
+            subject: scene.to_string(),
+            expected: "about equal (基本持平)".into(),
+            ours: format!("{vs_svo:.2}× SVO, {vs_esvo:.2}× ESVO"),
+            held: vs_svo <= RAYS_NOT_SLOWER && vs_esvo <= RAYS_NOT_SLOWER,
+        });
     }
     let _ = writeln!(out);
 }
@@ -372,7 +388,7 @@ mod tests {
 
     #[test]
     fn tables_carry_ours_the_papers_and_the_verdicts() {
-        let text = crate::paper::section(&fixture());
+        let text = crate::paper::section(&fixture()).markdown;
         for heading in ["Table 1", "Table 2", "Table 3", "growth per doubling", "Fig. 13"] {
             assert!(text.contains(heading), "missing {heading}:\n{text}");
         }
@@ -381,20 +397,23 @@ mod tests {
         // Growth: 2.5× holds, 3.5× does not; the bunny's time per doubling is 110/100 ms.
         let line =
             |needle: &str| text.lines().find(|l| l.contains(needle)).unwrap_or_else(|| panic!("{needle}:\n{text}"));
-        assert!(line("bunny svdag [bits]: storage grows 2.50×").ends_with("**held**"));
-        assert!(line("dragon svdag [bits]: storage grows 3.50×").ends_with("**not held**"));
+        assert!(line("- bunny svdag [bits]: SVDAG storage grows").contains("ours 2.50×"));
+        assert!(line("- bunny svdag [bits]: SVDAG storage grows").ends_with("**held**"));
+        assert!(line("- dragon svdag [bits]: SVDAG storage grows").contains("ours 3.50×"));
+        assert!(line("- dragon svdag [bits]: SVDAG storage grows").ends_with("**not held**"));
         assert!(line("| bunny | bits | 70.0 | 80.0 | 90.0 | 100.0 | 110.0 | 1.10× |").starts_with('|'));
         // Rays: bunny 10 vs 10 vs 10.5 holds; the dragon's SVDAG is 2× slower and does not.
         assert!(line("- bunny: SVDAG's ray time").ends_with("**held**"));
         assert!(line("- dragon: SVDAG's ray time").ends_with("**not held**"));
         // Nodes at 1024³: SVO 4 M against bits 1024³ nodes (20 000·2.5³/12 ≈ 26 K): 1/154, held.
-        assert!(line("- bunny: SVDAG holds 1/").ends_with("**held**"));
+        assert!(line("- bunny at 1024³: SVDAG holds at most 1/11").contains("ours 1/154"));
+        assert!(line("- bunny at 1024³: SVDAG holds at most 1/11").ends_with("**held**"));
     }
 
     #[test]
     fn other_runs_get_no_section() {
         let mut r = fixture();
         r.cases.retain(|c| c.structure != "svdag");
-        assert_eq!(section(&r), "");
+        assert!(section(&r).is_empty());
     }
 }

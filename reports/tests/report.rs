@@ -1,9 +1,7 @@
 //! Report generation on the fixture run (DESIGN.md §8): `report.md` and `report.html` carry the
 //! fixture's values, the HTML has its charts and images inline and no external reference.
 
-use std::collections::BTreeMap;
-
-use reports::html::png_data_uri;
+use reports::html::{Shot, Shots, png_data_uri};
 use reports::{Results, html, markdown, merge};
 
 fn fixture() -> Results {
@@ -26,14 +24,14 @@ fn tiny_png(rgb: [u8; 3]) -> Vec<u8> {
     png
 }
 
-/// Every image of the fixture but the dragon-48k org pair.
-fn images(results: &Results) -> BTreeMap<String, String> {
+/// Every image of the fixture but the dragon-48k org pair, each its thumbnail linked to itself.
+fn images(results: &Results) -> Shots {
     results
         .cases
         .iter()
         .flat_map(|c| &c.images)
         .filter(|p| !p.contains("dragon-48k__org"))
-        .map(|p| (p.clone(), png_data_uri(&tiny_png([200, 30, 30]))))
+        .map(|p| (p.clone(), Shot { thumb: png_data_uri(&tiny_png([200, 30, 30])), full: p.clone() }))
         .collect()
 }
 
@@ -96,10 +94,21 @@ fn html_has_no_external_reference() {
     for banned in ["http://", "https://", "src=\"//", "href=\"//", "<script", "<link", "@import", "url("] {
         assert!(!page.contains(banned), "report.html contains {banned}");
     }
-    // Every link is to an anchor on the page.
+    // Every link is to an anchor on the page or to a full-size image beside it.
     for (i, _) in page.match_indices("href=\"") {
-        assert_eq!(&page[i + 6..i + 7], "#", "external link at {}", &page[i..(i + 60).min(page.len())]);
+        let target = page[i + 6..].split('"').next().unwrap_or_default();
+        let local = target.starts_with('#') || (target.starts_with("images/") && !target.contains(".."));
+        assert!(local, "external link at {}", &page[i..(i + 60).min(page.len())]);
     }
+    // Every image is inline.
+    for (i, _) in page.match_indices(" src=\"") {
+        assert!(
+            page[i + 6..].starts_with("data:image/"),
+            "an image not inline at {}",
+            &page[i..(i + 60).min(page.len())]
+        );
+    }
+    assert!(page.contains("<a href=\"images/"), "thumbnails link their full-size images");
 }
 
 #[test]
@@ -120,7 +129,7 @@ fn merged_runs_are_machine_tagged_in_the_report() {
     let (a, mut b) = (fixture(), fixture());
     b.machine.hostname = "laptop".into();
     let merged = merge::merge(&[("gpu-box".into(), a), ("laptop".into(), b)]).expect("merge");
-    let page = html::report(&merged, &BTreeMap::new());
+    let page = html::report(&merged, &Shots::new());
     for want in ["org @ gpu-box", "org @ laptop", "<b>laptop</b>", "Machine <b>gpu-box</b>"] {
         assert!(page.contains(want), "merged report.html lacks {want}");
     }
@@ -171,6 +180,7 @@ fn cases_that_did_not_run_and_rays_at_the_bound_are_listed() {
         variant: None,
         kind: "budget".into(),
         reason: "scene 'grass-2000000000' needs about 476.8 GiB | more than the limit".into(),
+        part: None,
     });
     results.cases[0].render[0].rays_at_bound = 7;
     let md = markdown::report(&results);

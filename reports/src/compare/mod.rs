@@ -215,10 +215,14 @@ fn same_case(a: &Case, b: &Case) -> bool {
         && a.resolution == b.resolution
         && a.variant == b.variant
         && a.machine == b.machine
+        && a.part == b.part
 }
 
 fn case_name(c: &Case) -> String {
-    c.full_name()
+    match &c.part {
+        Some(part) => format!("{} ({part})", c.full_name()),
+        None => c.full_name(),
+    }
 }
 
 fn render_name(r: &RenderStats) -> String {

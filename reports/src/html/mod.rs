@@ -9,6 +9,8 @@ use std::fmt::Write;
 
 use base64::Engine;
 
+use crate::chapters;
+use crate::images;
 use crate::markdown::per_ray;
 use crate::merge;
 use crate::plots::{self, Bars};
@@ -19,49 +21,112 @@ use crate::schema::{Agreement, Case, Results, Timing};
 mod markdown;
 pub use markdown::markdown_fragment;
 
-/// A PNG as a `data:` URI, for [`report`]'s image map.
+/// A PNG as a `data:` URI.
 pub fn png_data_uri(png: &[u8]) -> String {
-    format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(png))
+    data_uri(png, "image/png")
 }
+
+/// Bytes as a `data:` URI of type `mime`.
+pub fn data_uri(bytes: &[u8], mime: &str) -> String {
+    format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
+}
+
+/// An image as the page shows it: its thumbnail inline, linked to the full-size file beside the
+/// report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shot {
+    /// The thumbnail as a `data:` URI.
+    pub thumb: String,
+    /// The full-size image, relative to the report (a heat map: coloured on its scene's scale).
+    pub full: String,
+}
+
+/// The images of a run, keyed by their paths in [`Case::images`].
+pub type Shots = BTreeMap<String, Shot>;
 
 /// The whole page. `images` maps a case's image path (as in [`Case::images`]) to its data URI;
 /// images missing from it are shown as a placeholder.
-pub fn report(results: &Results, images: &BTreeMap<String, String>) -> String {
+pub fn report(results: &Results, images: &Shots) -> String {
     let mut body = String::new();
     run_section(&mut body, results);
-    let scenes = results.scenes();
-    let studies = scaling::studies(results);
-    let paper: Vec<(Option<String>, String)> = merge::views(results)
-        .into_iter()
-        .map(|(tag, view)| (tag, crate::paper::section(&view)))
-        .filter(|(_, md)| !md.is_empty())
-        .collect();
-    contents(&mut body, &scenes, !paper.is_empty(), !studies.is_empty());
-    at_a_glance(&mut body, results, &scenes);
+    let chapters = chapters::chapters(results);
+    let glance = chapters::glance(&chapters);
+    contents(&mut body, &chapters, !glance.is_empty());
+    if !glance.is_empty() {
+        let _ = writeln!(body, "<section id=\"claims\">");
+        body.push_str(&markdown_fragment(&glance));
+        body.push_str("</section>\n");
+    }
     let not_run = crate::markdown::not_run_section(results);
     if !not_run.is_empty() {
         let _ = writeln!(body, "<section id=\"not-run\">");
         body.push_str(&markdown_fragment(&not_run));
         body.push_str("</section>\n");
     }
-    if !paper.is_empty() {
-        let _ = writeln!(body, "<section id=\"paper\"><h2>Paper reproductions</h2>");
-        for (tag, md) in &paper {
-            if let Some(tag) = tag {
-                let _ = writeln!(body, "<p class=\"note\">Machine <b>{}</b>:</p>", esc(tag));
+    for chapter in &chapters {
+        let mut html = String::new();
+        chapter_body(&mut html, chapter, images);
+        match (&chapter.part, chapter.summary()) {
+            (Some(part), Some(summary)) => {
+                let _ = writeln!(
+                    body,
+                    "<section id=\"{}\"><h2>{} (<code>--preset {}</code>)</h2>\n<p class=\"note\">{}</p>",
+                    part_anchor(&chapter.prefix),
+                    esc(&part.title),
+                    esc(&part.name),
+                    esc(&summary)
+                );
+                body.push_str(&demote(&html));
+                body.push_str("</section>\n");
             }
-            // Each reproduction's own headings sit one level under this section's.
-            body.push_str(&markdown_fragment(&md.replace("\n## ", "\n### ").replacen("## ", "### ", 1)));
+            _ => body.push_str(&html),
         }
-        body.push_str("</section>\n");
-    }
-    if !studies.is_empty() {
-        scaling_section(&mut body, &studies);
-    }
-    for scene in &scenes {
-        scene_section(&mut body, &results.scene_cases(scene), images);
     }
     page(&format!("accel-bench report — {}", results.run_id), &body)
+}
+
+/// A chapter's sections: its at-a-glance matrix, its paper reproductions, its scaling studies and
+/// its scenes, every id under the chapter's prefix.
+fn chapter_body(out: &mut String, chapter: &chapters::Chapter, images: &Shots) {
+    let results = &chapter.results;
+    let prefix = &chapter.prefix;
+    let scenes = results.scenes();
+    at_a_glance(out, results, &scenes, prefix);
+    if !chapter.reproductions.is_empty() {
+        let _ = writeln!(out, "<section id=\"{prefix}paper\"><h2>Paper reproductions</h2>");
+        for (tag, md) in &chapter.reproductions {
+            if let Some(tag) = tag {
+                let _ = writeln!(out, "<p class=\"note\">Machine <b>{}</b>:</p>", esc(tag));
+            }
+            // Each reproduction's own headings sit one level under this section's.
+            out.push_str(&markdown_fragment(&chapters::demote(md)));
+        }
+        out.push_str("</section>\n");
+    }
+    let studies = scaling::studies(results);
+    if !studies.is_empty() {
+        scaling_section(out, &studies, prefix);
+    }
+    for scene in &scenes {
+        scene_section(out, &results.scene_cases(scene), images, prefix);
+    }
+}
+
+/// The anchor of a part's section: its prefix without the trailing `-`.
+fn part_anchor(prefix: &str) -> String {
+    format!("part-{}", prefix.trim_end_matches('-'))
+}
+
+/// Every HTML heading one level deeper (`h6` stays), for a part's sections under its heading.
+fn demote(html: &str) -> String {
+    let mut out = html.to_string();
+    for level in (2..=5).rev() {
+        out = out
+            .replace(&format!("<h{level}>"), &format!("<h{}>", level + 1))
+            .replace(&format!("<h{level} "), &format!("<h{} ", level + 1))
+            .replace(&format!("</h{level}>"), &format!("</h{}>", level + 1));
+    }
+    out
 }
 
 const CSS: &str = "
@@ -86,7 +151,8 @@ figcaption { font-weight: 600; margin-bottom: 4px; } .missing { width: 200px; he
   align-items: center; justify-content: center; color: #888; border: 1px dashed #bbb; }
 .heat { display: inline-block; width: 160px; height: 10px; vertical-align: middle;
   background: linear-gradient(to right, #000 0%, #1a1acc 25%, #d91a1a 50%, #ffd900 75%, #fff 100%); border: 1px solid #999; }
-nav ul { columns: 3; } .scroll { overflow-x: auto; }
+nav ul { columns: 3; } nav ul ul { columns: 1; } .scroll { overflow-x: auto; }
+.swatch { display: inline-block; width: 12px; height: 12px; border: 1px solid #999; vertical-align: middle; }
 ";
 
 fn page(title: &str, body: &str) -> String {
@@ -173,30 +239,54 @@ fn run_section(out: &mut String, r: &Results) {
     );
 }
 
-fn contents(out: &mut String, scenes: &[&str], paper: bool, scaling: bool) {
-    let _ = writeln!(out, "<nav><h2>Contents</h2><ul>\n<li><a href=\"#glance\">At a glance</a></li>");
-    if paper {
-        let _ = writeln!(out, "<li><a href=\"#paper\">Paper reproductions</a></li>");
+fn contents(out: &mut String, chapters: &[chapters::Chapter], glance: bool) {
+    let _ = writeln!(out, "<nav><h2>Contents</h2><ul>");
+    if glance {
+        let _ = writeln!(out, "<li><a href=\"#claims\">Paper results at a glance</a></li>");
     }
-    if scaling {
-        let _ = writeln!(out, "<li><a href=\"#scaling\">Scaling</a></li>");
-    }
-    for s in scenes {
-        let _ = writeln!(out, "<li><a href=\"#{}\">{}</a></li>", anchor("scene", s), esc(s));
+    for chapter in chapters {
+        let items = chapter_contents(chapter);
+        match &chapter.part {
+            Some(part) => {
+                let _ = writeln!(
+                    out,
+                    "<li><a href=\"#{}\">{}</a><ul>{items}</ul></li>",
+                    part_anchor(&chapter.prefix),
+                    esc(&part.title)
+                );
+            }
+            None => out.push_str(&items),
+        }
     }
     let _ = writeln!(out, "</ul></nav>");
 }
 
+/// A chapter's entries in the contents.
+fn chapter_contents(chapter: &chapters::Chapter) -> String {
+    let prefix = &chapter.prefix;
+    let mut out = format!("<li><a href=\"#{prefix}glance\">At a glance</a></li>\n");
+    if !chapter.reproductions.is_empty() {
+        let _ = writeln!(out, "<li><a href=\"#{prefix}paper\">Paper reproductions</a></li>");
+    }
+    if !scaling::studies(&chapter.results).is_empty() {
+        let _ = writeln!(out, "<li><a href=\"#{prefix}scaling\">Scaling</a></li>");
+    }
+    for s in chapter.results.scenes() {
+        let _ = writeln!(out, "<li><a href=\"#{prefix}{}\">{}</a></li>", anchor("scene", s), esc(s));
+    }
+    out
+}
+
 /// Scene × structure matrix of Mrays/s on each scene's first render (the fastest in bold), and of
 /// memory.
-fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str]) {
+fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str], prefix: &str) {
     let mut labels: Vec<String> = Vec::new();
     for c in &r.cases {
         if !labels.contains(&c.label()) {
             labels.push(c.label());
         }
     }
-    let _ = writeln!(out, "<section id=\"glance\"><h2>At a glance</h2>");
+    let _ = writeln!(out, "<section id=\"{prefix}glance\"><h2>At a glance</h2>");
     for (title, value, higher_better) in [
         (
             "Mrays/s (first backend and workload; fastest in bold; † the strongest triangle reference)",
@@ -231,7 +321,7 @@ fn at_a_glance(out: &mut String, r: &Results, scenes: &[&str]) {
             let best = vals.iter().flatten().copied().reduce(|a, b| if (a > b) == higher_better { a } else { b });
             let _ = write!(
                 out,
-                "<tr><td><a href=\"#{}\">{}</a></td><td>{}</td>",
+                "<tr><td><a href=\"#{prefix}{}\">{}</a></td><td>{}</td>",
                 anchor("scene", scene),
                 esc(scene),
                 cases.first().map_or(0, |c| c.triangles)
@@ -297,10 +387,10 @@ pub fn human_bytes(b: u64) -> String {
     }
 }
 
-fn scaling_section(out: &mut String, studies: &[scaling::Study]) {
+fn scaling_section(out: &mut String, studies: &[scaling::Study], prefix: &str) {
     let _ = writeln!(
         out,
-        "<section id=\"scaling\"><h2>Scaling</h2>\n<p class=\"note\">Log–log, one series per structure across the \
+        "<section id=\"{prefix}scaling\"><h2>Scaling</h2>\n<p class=\"note\">Log–log, one series per structure across the \
          scenes of a family (or the resolutions of a voxel structure). The table gives k, the least-squares exponent of \
          y ∝ x^k (1 = linear; per voxel level also the growth factor 2^k).</p>"
     );
@@ -344,9 +434,9 @@ fn chart(out: &mut String, svg: Result<String, plots::PlotError>) {
     out.push('\n');
 }
 
-fn scene_section(out: &mut String, cases: &[&Case], images: &BTreeMap<String, String>) {
+fn scene_section(out: &mut String, cases: &[&Case], images: &Shots, prefix: &str) {
     let Some(first) = cases.first() else { return };
-    let _ = writeln!(out, "<section id=\"{}\"><h2>{}</h2>", anchor("scene", &first.scene), esc(&first.scene));
+    let _ = writeln!(out, "<section id=\"{prefix}{}\"><h2>{}</h2>", anchor("scene", &first.scene), esc(&first.scene));
     let _ = writeln!(
         out,
         "<p>{} triangles ({} degenerate), loaded in {:.0} ms. Source: {}</p>",
@@ -485,19 +575,45 @@ fn scene_charts(out: &mut String, scene: &str, cases: &[&Case]) {
     let _ = writeln!(out, "</div>");
 }
 
-/// Each render's shaded image beside its heat map (`<stem>.png`, `<stem>__steps.png`).
-fn scene_images(out: &mut String, cases: &[&Case], images: &BTreeMap<String, String>) {
-    let shaded: Vec<(&Case, &String)> = cases
-        .iter()
-        .flat_map(|c| c.images.iter().filter(|p| !p.ends_with("__steps.png")).map(move |p| (*c, p)))
-        .collect();
+/// The kinds of image a render has, by the suffix of their names.
+fn is_picture(path: &str) -> bool {
+    !["__steps16.png", "__steps.png", "__diff.png", "__filtered.png"].iter().any(|k| path.ends_with(k))
+}
+
+/// Each render's shaded image beside its traversal-step heat map (and the structure's filtered
+/// image, where it has one), every heat map of a workload on the scene's one scale; then where
+/// each structure's primary hits differ from the reference's.
+fn scene_images(out: &mut String, cases: &[&Case], images: &Shots) {
+    let shaded: Vec<(&Case, &String)> =
+        cases.iter().flat_map(|c| c.images.iter().filter(|p| is_picture(p)).map(move |p| (*c, p))).collect();
     if shaded.is_empty() {
         return;
     }
+    let mut workloads: Vec<&str> = Vec::new();
+    for (_, p) in &shaded {
+        if let Some((_, w)) = images::render_of(p)
+            && !workloads.contains(&w)
+        {
+            workloads.push(w);
+        }
+    }
+    let scales: Vec<String> = workloads
+        .iter()
+        .filter_map(|w| images::heat_scale(cases.iter().copied(), w).map(|s| format!("{s} steps ({w} rays)")))
+        .collect();
+    let scale = match scales.is_empty() {
+        true => "its image's own 99th percentile".to_string(),
+        false => format!(
+            "{} (white): one scale for every structure of this scene, the largest 99th percentile among them",
+            scales.join(", ")
+        ),
+    };
     let _ = writeln!(
         out,
         "<h3>Images</h3><p class=\"note\">Left: the shaded render. Right: traversal steps per pixel, \
-         <span class=\"heat\"></span> from 0 (black) to the image's 99th percentile (white).</p>\n<div class=\"shots\">"
+         <span class=\"heat\"></span> from 0 (black) to {}. Steps count each structure's own loop \
+         (BVH nodes, grid cells, octree iterations). Click an image for its full size.</p>\n<div class=\"shots\">",
+        esc(&scale)
     );
     for (case, path) in shaded {
         let stem = path.trim_end_matches(".png");
@@ -505,21 +621,90 @@ fn scene_images(out: &mut String, cases: &[&Case], images: &BTreeMap<String, Str
         let what: Vec<&str> = stem.rsplit("__").take(2).collect();
         let caption = format!("{} · {}", case.label(), what.iter().rev().copied().collect::<Vec<_>>().join(" · "));
         let _ = write!(out, "<figure><figcaption>{}</figcaption><div class=\"pair\">", esc(&caption));
-        for (p, alt) in [(path.clone(), "shaded"), (format!("{stem}__steps.png"), "steps per pixel")] {
-            match images.get(&p) {
-                Some(uri) => {
-                    let _ =
-                        write!(out, "<img alt=\"{} {alt}\" title=\"{}\" src=\"{uri}\">", esc(&case.label()), esc(&p));
-                }
-                None => {
-                    let _ = write!(out, "<div class=\"missing\" title=\"{}\">image missing</div>", esc(&p));
-                }
-            }
+        let heat = [format!("{stem}{}.png", images::STEPS_RAW), format!("{stem}__steps.png")]
+            .into_iter()
+            .find(|p| case.images.contains(p));
+        let filtered = Some(format!("{stem}__filtered.png")).filter(|p| case.images.contains(p));
+        shot(out, images, path, &format!("{} shaded", case.label()));
+        match heat {
+            Some(p) => shot(out, images, &p, &format!("{} steps per pixel", case.label())),
+            None => out.push_str("<div class=\"missing\">steps not counted</div>"),
+        }
+        if let Some(p) = filtered {
+            shot(out, images, &p, &format!("{} post-filtered", case.label()));
         }
         let _ = writeln!(out, "</div></figure>");
     }
     let _ = writeln!(out, "</div>");
+    differences(out, cases, images);
 }
+
+/// The difference views: per structure checked against the reference, the pixels where its
+/// primary hits differ, coloured by how (the agreement counts, made visible).
+fn differences(out: &mut String, cases: &[&Case], images: &Shots) {
+    let diffs: Vec<(&Case, &String)> = cases
+        .iter()
+        .flat_map(|c| c.images.iter().filter(|p| p.ends_with("__diff.png")).map(move |p| (*c, p)))
+        .collect();
+    if diffs.is_empty() {
+        return;
+    }
+    let swatch = |code: u8| {
+        let [r, g, b] = images::Difference::colour(code);
+        format!("<span class=\"swatch\" style=\"background:rgb({r},{g},{b})\"></span>")
+    };
+    let _ = writeln!(
+        out,
+        "<h3>Where hits differ from the reference</h3><p class=\"note\">Primary hits against the reference's on \
+         the same pixels, as the agreement columns count them: {} both miss, {} the same hit, {}{}{}{} another \
+         primitive at a relative <i>t</i> error under 10⁻⁴, 10⁻³, 10⁻² and beyond (every hit of a voxel \
+         structure, whose voxels are no triangles), {} a hit where the reference misses, {} a miss where it \
+         hits. Thumbnails keep the worst pixel of each block they shrink.</p>\n<div class=\"shots\">",
+        swatch(images::Difference::BothMiss.code()),
+        swatch(images::Difference::Same.code()),
+        swatch(images::Difference::Other(0.0).code()),
+        swatch(images::Difference::Other(images::T_ERROR_BANDS[0]).code()),
+        swatch(images::Difference::Other(images::T_ERROR_BANDS[1]).code()),
+        swatch(images::Difference::Other(images::T_ERROR_BANDS[2]).code()),
+        swatch(images::Difference::Extra.code()),
+        swatch(images::Difference::Missing.code()),
+    );
+    for (case, path) in diffs {
+        let agreement = images::render_of(path).and_then(|(backend, workload)| {
+            case.render.iter().find(|r| r.backend == backend && r.workload == workload)?.agreement.as_ref()
+        });
+        let counts = agreement.map_or(String::new(), |a| {
+            format!(
+                " — {} hit/miss, {} other primitive of {} px against {}",
+                a.hit_mismatches, a.prim_mismatches, a.pixels, a.reference
+            )
+        });
+        let _ = write!(out, "<figure><figcaption>{}{}</figcaption>", esc(&case.label()), esc(&counts));
+        shot(out, images, path, &format!("{} differences", case.label()));
+        let _ = writeln!(out, "</figure>");
+    }
+    let _ = writeln!(out, "</div>");
+}
+
+/// One image: its thumbnail, linked to the full-size file; a placeholder where it is missing.
+fn shot(out: &mut String, images: &Shots, path: &str, alt: &str) {
+    match images.get(path) {
+        Some(s) => {
+            let _ = write!(
+                out,
+                "<a href=\"{}\"><img alt=\"{}\" title=\"{}\" src=\"{}\"></a>",
+                esc(&s.full),
+                esc(alt),
+                esc(&s.full),
+                s.thumb
+            );
+        }
+        None => {
+            let _ = write!(out, "<div class=\"missing\" title=\"{}\">image missing</div>", esc(path));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
