@@ -39,6 +39,10 @@ pub enum Command {
         #[arg(value_name = "RUN")]
         run: PathBuf,
     },
+    /// Images only, nothing timed: for each scene and structure at any size, the shaded render,
+    /// its traversal steps per pixel (one heat scale per scene) and where its primary hits differ
+    /// from the reference BVH's.
+    Render(RenderArgs),
     /// List scenes, structures, backends or presets.
     List {
         #[arg(value_enum, default_value_t = ListWhat::All)]
@@ -241,6 +245,45 @@ pub struct RunArgs {
     /// org-fig1,esvo-beam.
     #[arg(long, value_delimiter = ',', value_name = "PRESET,...")]
     pub parts: Vec<String>,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scenes, comma-separated: built-in names (see `harness list scenes`), grass-<N>, name@f<t>
+    /// (one frame of an animated scene), or paths to .obj, .obj.gz, .gltf, .glb files.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub scenes: Vec<String>,
+    /// Structures, comma-separated (see `harness list structures`).
+    #[arg(long, value_delimiter = ',', default_value = "bvh")]
+    pub structures: Vec<String>,
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    #[arg(long, default_value_t = 1024)]
+    pub height: u32,
+    /// The rays each pixel casts (steps per pixel count all of them).
+    #[arg(long, value_enum, default_value_t = WorkloadArg::Primary)]
+    pub workload: WorkloadArg,
+    /// Ambient-occlusion rays per primary hit for the `ao` workload.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub ao_samples: u32,
+    /// Voxel structures: resolution 2^L per axis (sets voxel.levels; default 10).
+    #[arg(long, value_name = "L")]
+    pub levels: Option<u32>,
+    /// Structure parameter as key=value (repeatable), e.g. --param esvo.lod_pixels=1.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// Where the PNGs go (default results/render-<time>/).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all logical cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of the randomised workloads (AO directions).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Most memory the renders may use, e.g. 8G (default: the memory the OS reports available).
+    #[arg(long, value_name = "SIZE", value_parser = crate::budget::parse_size)]
+    pub memory_limit: Option<u64>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -30,8 +30,7 @@ pub fn write_case_images(
 ) -> Result<Vec<String>> {
     let CaseImages { frame, steps, reference } = what;
     let (w, h) = (frame.width, frame.height);
-    let shaded: Vec<u8> =
-        frame.pixels().flat_map(|(_, _, s)| images::shaded_rgb(s.is_hit(), s.shade, s.normal.to_array())).collect();
+    let shaded = shaded(frame);
     let mut written = Vec::new();
     let mut picture = |name: String, rgb: &[u8]| -> Result<()> {
         let path = format!("{rel}/{name}");
@@ -71,6 +70,11 @@ pub fn write_case_images(
         written.push(path);
     }
     Ok(written)
+}
+
+/// A frame's shaded image, 8-bit RGB, row-major.
+pub fn shaded(frame: &Frame) -> Vec<u8> {
+    frame.pixels().flat_map(|(_, _, s)| images::shaded_rgb(s.is_hit(), s.shade, s.normal.to_array())).collect()
 }
 
 fn write(dir: &Path, name: &str, f: impl FnOnce(&Path) -> Result<(), images::ImageError>) -> Result<()> {

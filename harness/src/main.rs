@@ -11,6 +11,7 @@ mod machine;
 mod merge;
 mod output;
 mod probes;
+mod render;
 mod run;
 mod shadows;
 
@@ -44,6 +45,7 @@ fn main() -> ExitCode {
         Some(Command::Merge(args)) => merge::merge(&args, command),
         Some(Command::Report { run }) => output::read_results(&run)
             .and_then(|(dir, results)| output::write_results(&dir, &results, &mut Default::default())),
+        Some(Command::Render(args)) => render::render_images(&args),
         Some(Command::List { what }) => {
             list(what);
             Ok(())

@@ -287,7 +287,7 @@ impl Matrix<'_> {
 
 /// Loads a scene within the budget: a scene whose name gives its size is checked before it is
 /// generated, a subdivided one after its base is loaded and before it is subdivided.
-fn load_scene(name: &str, budget: &Budget, frames: Option<u32>) -> Result<Scene> {
+pub(crate) fn load_scene(name: &str, budget: &Budget, frames: Option<u32>) -> Result<Scene> {
     let mut scene = load_scene_alone(name, budget)?;
     // An animated scene's frame count is the run's (`--frames`), not its default.
     if let (Some(anim), Some(frames)) = (scene.animation.as_mut(), frames) {

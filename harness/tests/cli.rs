@@ -106,6 +106,45 @@ fn a_bad_scene_is_skipped_with_its_error_and_the_run_goes_on() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// `harness render`: images only, at the size asked, each structure's heat map on the scene's one
+/// scale, difference views against the reference BVH, and no results file.
+#[test]
+fn render_writes_images_only() {
+    let out = temp_dir("render");
+    let out_arg = out.to_string_lossy().into_owned();
+    let args = [
+        "render",
+        "--scenes",
+        "teapot",
+        "--structures",
+        "bvh,org",
+        "--width",
+        "70",
+        "--height",
+        "30",
+        "--out",
+        &out_arg,
+    ];
+    let o = harness(&args);
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .expect("the output directory")
+        .map(|e| e.expect("an entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let heat: Vec<&String> = names.iter().filter(|n| n.contains("__steps-")).collect();
+    assert_eq!(heat.len(), 2, "{names:?}");
+    let scale = |n: &str| n.rsplit_once("__steps-").map(|(_, s)| s.to_string());
+    assert_eq!(scale(heat[0]), scale(heat[1]), "one heat scale for the scene: {names:?}");
+    for want in ["teapot__bvh__primary.png", "teapot__org__primary.png", "teapot__org__primary__diff.png"] {
+        let img = image::open(out.join(want)).unwrap_or_else(|e| panic!("{want}: {e} in {names:?}"));
+        assert_eq!((img.width(), img.height()), (70, 30));
+    }
+    assert!(!names.iter().any(|n| n.starts_with("teapot__bvh__primary__diff")), "the reference has no difference view");
+    assert!(!names.iter().any(|n| n.ends_with(".json")), "nothing is timed or recorded: {names:?}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn the_paper_preset_refuses_flags_that_would_change_its_parts() {
     for (args, want) in [

@@ -1,6 +1,8 @@
 //! The report's charts (DESIGN.md §8), drawn with plotters into SVG strings that `report.html`
 //! inlines: grouped bars (build and render times, with min–max whiskers), stacked bars (memory by
-//! component), and log–log scaling plots with the fitted exponent in the legend. Text is left to
+//! component), log–log scaling plots with the fitted exponent in the legend, and per scene the
+//! trade-off a user chooses on, Mrays/s against memory. Legends sit beside the plot, never over
+//! it; log axes tick at 1, 2, 5 × 10ⁿ (or powers of two for voxel resolutions). Text is left to
 //! the browser (no font files), so the SVG holds no external reference. The SVG is meant to be
 //! inlined in HTML, so it carries no `xmlns` either.
 
@@ -51,22 +53,107 @@ pub struct Bars {
     pub ranges: Vec<Option<(f64, f64)>>,
 }
 
-/// Draws into an SVG string; plotters' errors become a [`PlotError`] naming the chart.
+/// A legend entry: its label, colour and marker.
+#[derive(Clone, Debug)]
+struct Entry {
+    label: String,
+    color: RGBColor,
+    marker: Marker,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Marker {
+    Square,
+    Dot,
+    Line,
+}
+
+/// Pixels a legend needs for its longest label (13 px sans-serif, about 7 px a character).
+fn legend_width(entries: &[Entry]) -> u32 {
+    if entries.is_empty() {
+        return 0;
+    }
+    let longest = entries.iter().map(|e| e.label.chars().count()).max().unwrap_or(0) as u32;
+    (longest * 7 + 34).clamp(80, 320)
+}
+
+/// Draws into an SVG string: the chart `size` wide and high, its legend (if any) in a strip of its
+/// own to the right; plotters' errors become a [`PlotError`] naming the chart.
 fn svg(
     title: &str,
     size: (u32, u32),
+    legend: &[Entry],
     draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
 ) -> Result<String, PlotError> {
     let mut out = String::new();
+    let extra = legend_width(legend);
     {
-        let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (size.0 + extra, size.1)).into_drawing_area();
         let err = |message: String| PlotError { title: title.into(), message };
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        draw(&root).map_err(err)?;
+        let (plot, side) = root.split_horizontally(size.0);
+        draw(&plot).map_err(err)?;
+        draw_legend(&side, legend).map_err(err)?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     // Inline SVG in HTML needs no namespace, and without it the page holds no URL at all.
     Ok(out.replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1))
+}
+
+/// The legend strip: one entry a row from the top of the plot area down.
+fn draw_legend(area: &DrawingArea<SVGBackend, Shift>, entries: &[Entry]) -> Result<(), String> {
+    let style = LABEL_FONT.into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+    for (i, entry) in entries.iter().enumerate() {
+        let y = 44 + 18 * i as i32;
+        let c = entry.color;
+        match entry.marker {
+            Marker::Square => area.draw(&Rectangle::new([(6, y - 5), (16, y + 5)], c.filled())),
+            Marker::Dot => area.draw(&Circle::new((11, y), 4, c.filled())),
+            Marker::Line => area.draw(&PathElement::new(vec![(4, y), (18, y)], c.stroke_width(2))),
+        }
+        .map_err(e)?;
+        area.draw(&Text::new(entry.label.clone(), (24, y), style.clone())).map_err(e)?;
+    }
+    Ok(())
+}
+
+/// Tick positions for a log axis over `lo..hi`: 1, 2, 5 × 10ⁿ, or only the powers of ten when
+/// the range spans many decades (at most about eight ticks).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    let decades = (hi / lo).log10();
+    let mantissas: &[f64] = if decades > 4.0 {
+        &[1.0]
+    } else if decades > 1.5 {
+        &[1.0, 3.0]
+    } else {
+        &[1.0, 2.0, 5.0]
+    };
+    let mut ticks = Vec::new();
+    let mut p = 10f64.powi(lo.log10().floor() as i32);
+    while p <= hi {
+        for m in mantissas {
+            let t = m * p;
+            if t >= lo && t <= hi {
+                ticks.push(t);
+            }
+        }
+        p *= 10.0;
+    }
+    ticks
+}
+
+/// Tick positions at powers of two over `lo..hi` (voxel resolutions 2^L).
+fn pow2_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut ticks = Vec::new();
+    let mut t = 2f64.powi(lo.max(1.0).log2().ceil() as i32);
+    while t <= hi {
+        ticks.push(t);
+        t *= 2.0;
+    }
+    ticks
 }
 
 fn e<E: std::fmt::Display>(e: E) -> String {
@@ -81,8 +168,16 @@ pub fn grouped_bars(title: &str, y_label: &str, categories: &[String], series: &
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max);
     let k = series.len();
-    svg(title, BAR_SIZE, |root| {
-        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top, if k > 1 { k } else { 0 }))?;
+    let legend: Vec<Entry> = match k > 1 {
+        true => series
+            .iter()
+            .enumerate()
+            .map(|(i, s)| Entry { label: s.name.clone(), color: color(i), marker: Marker::Square })
+            .collect(),
+        false => Vec::new(),
+    };
+    svg(title, BAR_SIZE, &legend, |root| {
+        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top))?;
         let width = 0.8 / k.max(1) as f64;
         for (si, s) in series.iter().enumerate() {
             let fill = color(si);
@@ -93,27 +188,13 @@ pub fn grouped_bars(title: &str, y_label: &str, categories: &[String], series: &
                 .enumerate()
                 .filter(|(_, v)| v.is_finite())
                 .map(|(ci, &v)| Rectangle::new([(x0(ci), 0.0), (x0(ci) + width * 0.9, v)], fill.filled()));
-            let drawn = chart.draw_series(bars).map_err(e)?;
-            if k > 1 {
-                drawn
-                    .label(s.name.clone())
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], fill.filled()));
-            }
+            chart.draw_series(bars).map_err(e)?;
             let whiskers = s.ranges.iter().enumerate().filter_map(|(ci, r)| {
                 let (lo, hi) = (*r)?;
                 let x = x0(ci) + width * 0.45;
                 Some(PathElement::new(vec![(x, lo), (x, hi)], BLACK.stroke_width(1)))
             });
             chart.draw_series(whiskers).map_err(e)?;
-        }
-        if k > 1 {
-            chart
-                .configure_series_labels()
-                .label_font(LABEL_FONT)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()
-                .map_err(e)?;
         }
         Ok(())
     })
@@ -130,10 +211,17 @@ pub fn stacked_bars(
     let n = categories.len();
     let top = (0..n).map(|ci| components.iter().map(|(_, v)| v.get(ci).copied().unwrap_or(0.0)).sum::<f64>());
     let top = top.fold(0.0f64, f64::max);
-    svg(title, BAR_SIZE, |root| {
-        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top, components.len()))?;
+    // Top of the stack first, as the bars read.
+    let legend: Vec<Entry> = components
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(i, (name, _))| Entry { label: name.clone(), color: color(i), marker: Marker::Square })
+        .collect();
+    svg(title, BAR_SIZE, &legend, |root| {
+        let mut chart = bar_frame(root, title, y_label, categories, nice_top(top))?;
         let mut base = vec![0.0; n];
-        for (i, (name, values)) in components.iter().enumerate() {
+        for (i, (_, values)) in components.iter().enumerate() {
             let fill = color(i);
             let bars: Vec<_> = (0..n)
                 .filter_map(|ci| {
@@ -143,20 +231,8 @@ pub fn stacked_bars(
                     (v > 0.0).then(|| Rectangle::new([(ci as f64 + 0.2, lo), (ci as f64 + 0.8, lo + v)], fill.filled()))
                 })
                 .collect();
-            chart
-                .draw_series(bars)
-                .map_err(e)?
-                .label(name.clone())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], fill.filled()));
+            chart.draw_series(bars).map_err(e)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font(LABEL_FONT)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
         Ok(())
     })
 }
@@ -177,13 +253,27 @@ pub fn scaling(study: &Study) -> Result<String, PlotError> {
         Axis::Resolution => "voxel resolution 2^L",
     };
     let y_is_bytes = study.y_label == "bytes";
-    svg(&study.title, SCALING_SIZE, |root| {
+    let legend: Vec<Entry> = study
+        .series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Entry { label: s.legend(study.x), color: color(i), marker: Marker::Dot })
+        .collect();
+    let (xr, yr) = ((x0 / 1.25, x1 * 1.25), (y0 / 1.5, y1 * 1.5));
+    let x_ticks = match study.x {
+        Axis::Triangles => log_ticks(xr.0, xr.1),
+        Axis::Resolution => pow2_ticks(xr.0, xr.1),
+    };
+    svg(&study.title, SCALING_SIZE, &legend, |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(&study.title, TITLE_FONT)
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d((x0 / 1.25..x1 * 1.25).log_scale(), (y0 / 1.5..y1 * 1.5).log_scale())
+            .build_cartesian_2d(
+                (xr.0..xr.1).log_scale().with_key_points(x_ticks),
+                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
+            )
             .map_err(e)?;
         chart
             .configure_mesh()
@@ -201,22 +291,91 @@ pub fn scaling(study: &Study) -> Result<String, PlotError> {
         for (i, s) in study.series.iter().enumerate() {
             let c = color(i);
             chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2))).map_err(e)?;
-            chart
-                .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, c.filled())))
-                .map_err(e)?
-                .label(s.legend(study.x))
-                .legend(move |(x, y)| Circle::new((x + 5, y), 4, c.filled()));
+            chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font(LABEL_FONT)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
         Ok(())
     })
+}
+
+/// One structure of a scene on the speed–memory chart.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Choice {
+    pub label: String,
+    pub bytes: f64,
+    pub mrays_per_s: f64,
+}
+
+/// Mrays/s against memory, log–log, one point per structure (labelled beside it and in the
+/// legend), the Pareto front — the structures no other beats on both — joined by a line: the
+/// trade-off a user chooses on.
+pub fn speed_memory(title: &str, choices: &[Choice]) -> Result<String, PlotError> {
+    let points: Vec<&Choice> = choices.iter().filter(|c| c.bytes > 0.0 && c.mrays_per_s > 0.0).collect();
+    if points.len() < 2 {
+        return Err(PlotError {
+            title: title.into(),
+            message: "fewer than two structures with speed and memory".into(),
+        });
+    }
+    let (x0, x1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), c| (lo.min(c.bytes), hi.max(c.bytes)));
+    let (y0, y1) =
+        points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), c| (lo.min(c.mrays_per_s), hi.max(c.mrays_per_s)));
+    let (xr, yr) = ((x0 / 1.6, x1 * 1.6), (y0 / 1.4, y1 * 1.4));
+    let front = pareto_front(&points);
+    let mut legend: Vec<Entry> = points
+        .iter()
+        .enumerate()
+        .map(|(i, c)| Entry {
+            label: format!("{}: {}, {:.2} Mrays/s", c.label, bytes(c.bytes), c.mrays_per_s),
+            color: color(i),
+            marker: Marker::Dot,
+        })
+        .collect();
+    legend.push(Entry { label: "Pareto front".into(), color: RGBColor(60, 60, 60), marker: Marker::Line });
+    svg(title, SCALING_SIZE, &legend, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, TITLE_FONT)
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                (xr.0..xr.1).log_scale().with_key_points(log_ticks(xr.0, xr.1)),
+                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
+            )
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc("memory")
+            .y_desc("Mrays/s")
+            .label_style(LABEL_FONT)
+            .axis_desc_style(LABEL_FONT)
+            .x_label_formatter(&|x| bytes(*x))
+            .y_label_formatter(&|y| significant(*y))
+            .draw()
+            .map_err(e)?;
+        let line: Vec<(f64, f64)> = front.iter().map(|c| (c.bytes, c.mrays_per_s)).collect();
+        chart.draw_series(LineSeries::new(line, RGBColor(60, 60, 60).stroke_width(1))).map_err(e)?;
+        let style = ("sans-serif", 11).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Bottom));
+        for (i, c) in points.iter().enumerate() {
+            let p = (c.bytes, c.mrays_per_s);
+            chart.draw_series(std::iter::once(Circle::new(p, 5, color(i).filled()))).map_err(e)?;
+            let (px, py) = chart.backend_coord(&p);
+            root.draw(&Text::new(c.label.clone(), (px + 6, py - 3), style.clone())).map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
+/// The choices no other is both smaller and faster than, by memory.
+fn pareto_front<'a>(points: &[&'a Choice]) -> Vec<&'a Choice> {
+    let mut sorted = points.to_vec();
+    sorted.sort_by(|a, b| a.bytes.total_cmp(&b.bytes).then(b.mrays_per_s.total_cmp(&a.mrays_per_s)));
+    let mut front: Vec<&Choice> = Vec::new();
+    for c in sorted {
+        if front.last().is_none_or(|best| c.mrays_per_s > best.mrays_per_s) {
+            front.push(c);
+        }
+    }
+    front
 }
 
 type BarChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
@@ -271,11 +430,9 @@ fn category_labels(
     Ok(())
 }
 
-/// The y-axis top: above the tallest bar by enough to fit a legend of `legend` entries in the
-/// upper part of the plot; never zero.
-fn nice_top(top: f64, legend: usize) -> f64 {
-    let headroom = 1.1 + if legend > 0 { 0.1 + 0.085 * legend as f64 } else { 0.0 };
-    if top > 0.0 && top.is_finite() { top * headroom } else { 1.0 }
+/// The y-axis top: a tenth above the tallest bar; never zero.
+fn nice_top(top: f64) -> f64 {
+    if top > 0.0 && top.is_finite() { top * 1.1 } else { 1.0 }
 }
 
 /// 1200 → "1.2k", 3.5e6 → "3.5M".
@@ -338,6 +495,35 @@ mod tests {
         };
         let svg = scaling(&study).unwrap();
         assert!(svg.contains("org (k = 1.00)"), "{svg}");
+        // The legend sits right of the plot: the SVG is wider than the plot by its strip.
+        assert!(
+            svg.contains(&format!(
+                "width=\"{}\"",
+                SCALING_SIZE.0
+                    + legend_width(&[Entry { label: "org (k = 1.00)".into(), color: color(0), marker: Marker::Dot }])
+            )),
+            "{}",
+            &svg[..200]
+        );
+        let choices = [
+            Choice { label: "bvh".into(), bytes: 1e6, mrays_per_s: 5.0 },
+            Choice { label: "org".into(), bytes: 4e5, mrays_per_s: 3.0 },
+            Choice { label: "svo".into(), bytes: 2e6, mrays_per_s: 1.0 },
+        ];
+        let svg = speed_memory("bunny: Mrays/s against memory", &choices).unwrap();
+        assert!(svg.contains("bvh: 977 KiB, 5.00 Mrays/s") && svg.contains("Pareto front"), "{svg}");
+        let refs: Vec<&Choice> = choices.iter().collect();
+        let front: Vec<&str> = pareto_front(&refs).iter().map(|c| c.label.as_str()).collect();
+        assert_eq!(front, ["org", "bvh"], "svo is both larger and slower than bvh");
+    }
+
+    #[test]
+    fn log_ticks_are_round() {
+        assert_eq!(log_ticks(0.8, 60.0), [1.0, 3.0, 10.0, 30.0]);
+        assert_eq!(log_ticks(3.0, 40.0), [5.0, 10.0, 20.0]);
+        assert_eq!(log_ticks(1.0, 1e7), [1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6, 1e7]);
+        assert_eq!(pow2_ticks(100.0, 2500.0), [128.0, 256.0, 512.0, 1024.0, 2048.0]);
+        assert!(log_ticks(0.0, 1.0).is_empty());
     }
 
     #[test]

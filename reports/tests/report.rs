@@ -66,10 +66,13 @@ fn html_tables_carry_the_fixture_values() {
 fn html_has_charts_images_and_paper_claims() {
     let r = fixture();
     let page = html::report(&r, &images(&r));
-    // Per scene: memory, build and render charts; then two scaling studies (build and memory).
-    assert_eq!(page.matches("<svg").count(), 2 * 3 + 2, "charts");
+    // Per scene: memory, build, render and speed-against-memory charts; then two scaling studies
+    // (build and memory).
+    assert_eq!(page.matches("<svg").count(), 2 * 4 + 2, "charts");
     for want in [
         "dragon-11k: memory by component",
+        "dragon-48k: Mrays/s against memory",
+        "Pareto front",
         "dragon-48k: render time",
         "dragon: build time vs triangles",
         "dragon: memory vs triangles",

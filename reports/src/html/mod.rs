@@ -572,6 +572,16 @@ fn scene_charts(out: &mut String, scene: &str, cases: &[&Case]) {
         })
         .collect();
     chart(out, plots::grouped_bars(&format!("{scene}: render time"), "ms", &labels, &series));
+    let choices: Vec<plots::Choice> = cases
+        .iter()
+        .filter_map(|c| {
+            let r = c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary")?;
+            Some(plots::Choice { label: c.label(), bytes: c.memory.bytes as f64, mrays_per_s: r.mrays_per_s })
+        })
+        .collect();
+    if choices.len() >= 2 {
+        chart(out, plots::speed_memory(&format!("{scene}: Mrays/s against memory (CPU, primary rays)"), &choices));
+    }
     let _ = writeln!(out, "</div>");
 }
 
