@@ -8,6 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use rayon::prelude::*;
 use reports::html::{Shot, Shots};
 use reports::images;
 use reports::{Case, Results};
@@ -130,7 +131,8 @@ pub fn write_results(dir: &Path, results: &Results, cache: &mut ShotCache) -> Re
 /// full-size file are coloured from the raw counts on the scene's scale, drawn again only when
 /// that scale changes.
 fn shots(dir: &Path, results: &Results, cache: &mut ShotCache) -> Shots {
-    let mut shots = Shots::new();
+    // Every image with its cache key (a heat map's names its scale).
+    let mut wanted: Vec<(String, String, Option<u32>)> = Vec::new();
     for case in &results.cases {
         for path in &case.images {
             let scale = match path.ends_with(&format!("{}.png", images::STEPS_RAW)) {
@@ -142,25 +144,31 @@ fn shots(dir: &Path, results: &Results, cache: &mut ShotCache) -> Shots {
                 false => None,
             };
             let key = scale.map_or_else(|| path.clone(), |s| format!("{path}@{s}"));
-            if !cache.contains_key(&key) {
-                let made = match scale {
-                    Some(scale) => heat_shot(dir, path, scale),
-                    None => picture_shot(dir, path),
-                };
-                match made {
-                    Ok(shot) => {
-                        cache.insert(key.clone(), shot);
-                    }
-                    // Shown as missing in the page; the run itself goes on.
-                    Err(e) => eprintln!("accel-bench: warning: image {path} left out of the report: {e:#}"),
-                }
-            }
-            if let Some(shot) = cache.get(&key) {
-                shots.insert(path.clone(), shot.clone());
-            }
+            wanted.push((path.clone(), key, scale));
         }
     }
-    shots
+    // The new ones are made in parallel: a run copied without its thumbnails makes them all.
+    let made: Vec<(String, String, Result<Shot>)> = wanted
+        .par_iter()
+        .filter(|(_, key, _)| !cache.contains_key(key))
+        .map(|(path, key, scale)| {
+            let shot = match scale {
+                Some(scale) => heat_shot(dir, path, *scale),
+                None => picture_shot(dir, path),
+            };
+            (path.clone(), key.clone(), shot)
+        })
+        .collect();
+    for (path, key, shot) in made {
+        match shot {
+            Ok(shot) => {
+                cache.insert(key, shot);
+            }
+            // Shown as missing in the page; the run itself goes on.
+            Err(e) => eprintln!("accel-bench: warning: image {path} left out of the report: {e:#}"),
+        }
+    }
+    wanted.into_iter().filter_map(|(path, key, _)| Some((path, cache.get(&key)?.clone()))).collect()
 }
 
 /// A picture's thumbnail from `thumbs/`, made from the full-size image if it is not there.
@@ -171,10 +179,20 @@ fn picture_shot(dir: &Path, path: &str) -> Result<Shot> {
         Err(_) => {
             let full = dir.join(path);
             let (w, h, rgb) = images::read_rgb(&full).with_context(|| format!("reading {}", full.display()))?;
-            let (t, tw, th) = images::thumb_rgb(&rgb, w, h);
-            let bytes = match thumb.ends_with(".png") {
-                true => images::png_bytes(tw, th, &t),
-                false => images::jpeg_bytes(tw, th, &t),
+            // A difference view shrinks by its worst pixels, as the run made it, not by the mean.
+            let codes: Option<Vec<u8>> = match path.ends_with("__diff.png") {
+                true => rgb.chunks(3).map(|p| images::Difference::code_of([p[0], p[1], p[2]])).collect(),
+                false => None,
+            };
+            let bytes = match codes {
+                Some(codes) => {
+                    let (t, tw, th) = images::thumb_codes(&codes, w, h);
+                    images::png_bytes(tw, th, &images::difference_image(&t))
+                }
+                None => {
+                    let (t, tw, th) = images::thumb_rgb(&rgb, w, h);
+                    images::jpeg_bytes(tw, th, &t)
+                }
             }
             .context("encoding a thumbnail")?;
             write_new(&dir.join(&thumb), &bytes)?;
@@ -353,7 +371,11 @@ mod tests {
         }
         let scale = images::nice_scale(10.0 + 3.0 * 11.0);
         assert!(page.contains(&format!("to {scale} steps (primary rays)")), "the shared scale's legend");
-        assert!(dir.join(format!("images/heat/s3__x0__cpu__primary__steps-{scale}.png")).is_file());
+        // The heat map the page links is the render's own steps, coloured on that scale.
+        let heat = dir.join(format!("images/heat/s3__x0__cpu__primary__steps-{scale}.png"));
+        let (w, h, rgb) = images::read_rgb(&heat).expect("the heat map");
+        assert_eq!((w, h), (512, 512));
+        assert!(rgb == images::heat_image(&images::steps_u16(&steps), scale), "{} holds other counts", heat.display());
         let _ = fs::remove_dir_all(&dir);
     }
 }

@@ -27,11 +27,6 @@ pub struct Chapter {
 }
 
 impl Chapter {
-    /// The chapter's heading: the part's title and preset, or nothing for a run of one preset.
-    pub fn title(&self) -> Option<String> {
-        self.part.as_ref().map(|p| format!("{} (`--preset {}`)", p.title, p.name))
-    }
-
     /// One line on how the part ran: its settings, wall time, and how it was scaled down.
     pub fn summary(&self) -> Option<String> {
         let p = self.part.as_ref()?;

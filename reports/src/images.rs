@@ -22,12 +22,14 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
     image::save_buffer(path, rgb, width, height, ExtendedColorType::Rgb8)
 }
 
-/// Writes a 16-bit grey PNG: raw counts, lossless.
+/// Writes a 16-bit grey PNG: raw counts, lossless (the image crate puts them in PNG's byte order).
 pub fn write_png16(path: &Path, width: u32, height: u32, values: &[u16]) -> Result<(), ImageError> {
-    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out).write_image(&bytes, width, height, ExtendedColorType::L16)?;
-    std::fs::write(path, out).map_err(ImageError::IoError)
+    let buffer = image::ImageBuffer::<image::Luma<u16>, &[u16]>::from_raw(width, height, values).ok_or_else(|| {
+        ImageError::Parameter(image::error::ParameterError::from_kind(
+            image::error::ParameterErrorKind::DimensionMismatch,
+        ))
+    })?;
+    buffer.save_with_format(path, image::ImageFormat::Png)
 }
 
 /// Reads a 16-bit grey PNG written by [`write_png16`]: (width, height, values).
@@ -266,6 +268,11 @@ impl Difference {
             _ => [235, 40, 40],
         }
     }
+
+    /// The code of a colour [`Difference::colour`] gives (reading a difference view back).
+    pub fn code_of(rgb: [u8; 3]) -> Option<u8> {
+        (0..=7).find(|&c| Difference::colour(c) == rgb)
+    }
 }
 
 /// Difference codes coloured.
@@ -331,6 +338,19 @@ mod tests {
     }
 
     #[test]
+    fn raw_counts_survive_a_round_trip() {
+        let dir = std::env::temp_dir().join(format!("accel-bench-png16-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("counts.png");
+        let values: Vec<u16> =
+            (0..6 * 4).map(|i| (i * 2731 % 65536) as u16).chain([0, 1, 255, 256, u16::MAX, 3]).collect();
+        write_png16(&path, 6, 5, &values).unwrap();
+        assert_eq!(read_png16(&path).unwrap(), (6, 5, values), "the counts read back as written");
+        assert!(write_png16(&path, 7, 5, &[0; 30]).is_err(), "a size that does not match the counts");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn thumbnails_sit_beside_their_images() {
         assert_eq!(thumb_path("images/a__bvh__cpu__primary.png"), "images/thumbs/a__bvh__cpu__primary.jpg");
         assert_eq!(thumb_path("images/org-fig1/a__steps16.png"), "images/org-fig1/thumbs/a__steps16.png");
@@ -368,6 +388,7 @@ mod tests {
         let codes: Vec<u8> = order.iter().map(|d| d.code()).collect();
         assert!(codes.windows(2).all(|w| w[0] < w[1]), "{codes:?}");
         let colours: Vec<[u8; 3]> = codes.iter().map(|&c| Difference::colour(c)).collect();
+        assert!(codes.iter().zip(&colours).all(|(&c, &rgb)| Difference::code_of(rgb) == Some(c)), "read back");
         for (i, a) in colours.iter().enumerate() {
             for b in &colours[i + 1..] {
                 assert_ne!(a, b, "every class its own colour");

@@ -126,9 +126,26 @@ fn header(out: &mut String, r: &Results) {
     if let Some(p) = &m.probes {
         let _ = writeln!(out, "- machine probes: {}", p.describe());
     }
-    let _ = writeln!(
-        out,
-        "- settings: preset `{}`, {}×{}, {} threads, {} warm-up + {} timed reps, workloads {}, harness built `{}`",
+    let _ = writeln!(out, "- settings: {}", settings_text(r));
+    let _ = writeln!(out, "- command: `{}`", s.command);
+}
+
+/// How a run was set up, in words: its preset and settings, or for a many-part run its parts
+/// (each part's settings head its chapter).
+pub(crate) fn settings_text(r: &Results) -> String {
+    let s = &r.settings;
+    if !r.parts.is_empty() {
+        let names: Vec<&str> = r.parts.iter().map(|p| p.name.as_str()).collect();
+        return format!(
+            "preset {}: {} parts ({}), each with its own settings under its heading; harness built {}",
+            s.preset,
+            names.len(),
+            names.join(", "),
+            s.build_profile
+        );
+    }
+    format!(
+        "preset {}, {}×{}, {} threads, {} warm-up + {} timed reps, workloads {}, harness built {}",
         s.preset,
         s.width,
         s.height,
@@ -137,8 +154,7 @@ fn header(out: &mut String, r: &Results) {
         s.reps,
         s.workloads.join(", "),
         s.build_profile
-    );
-    let _ = writeln!(out, "- command: `{}`", s.command);
+    )
 }
 
 /// The fitted exponent of every scaling study (the plots are in report.html).

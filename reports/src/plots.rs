@@ -20,8 +20,9 @@ const SCALING_SIZE: (u32, u32) = (660, 400);
 const LABEL_FONT: (&str, u32) = ("sans-serif", 13);
 const TITLE_FONT: (&str, u32) = ("sans-serif", 17);
 
-/// Tableau 10: distinguishable, and readable by most colour-blind readers.
-const PALETTE: [RGBColor; 10] = [
+/// Tableau 20 (its ten hues, each with its light twin after it in the second half): distinct for
+/// the up to twenty memory components or structures of a chart.
+const PALETTE: [RGBColor; 20] = [
     RGBColor(78, 121, 167),
     RGBColor(242, 142, 43),
     RGBColor(225, 87, 89),
@@ -32,6 +33,16 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(255, 157, 167),
     RGBColor(156, 117, 95),
     RGBColor(186, 176, 172),
+    RGBColor(160, 203, 232),
+    RGBColor(255, 190, 125),
+    RGBColor(255, 157, 154),
+    RGBColor(134, 188, 182),
+    RGBColor(140, 209, 125),
+    RGBColor(241, 206, 99),
+    RGBColor(212, 166, 200),
+    RGBColor(250, 191, 210),
+    RGBColor(215, 181, 166),
+    RGBColor(121, 112, 110),
 ];
 
 pub fn color(i: usize) -> RGBColor {
@@ -68,6 +79,10 @@ enum Marker {
     Line,
 }
 
+/// The first legend row's centre, level with the plot's top, and the rows' pitch, in pixels.
+const LEGEND_TOP: i32 = 44;
+const LEGEND_ROW: i32 = 18;
+
 /// Pixels a legend needs for its longest label (13 px sans-serif, about 7 px a character).
 fn legend_width(entries: &[Entry]) -> u32 {
     if entries.is_empty() {
@@ -87,8 +102,10 @@ fn svg(
 ) -> Result<String, PlotError> {
     let mut out = String::new();
     let extra = legend_width(legend);
+    // Taller than asked where the legend needs it: every entry stays readable.
+    let height = size.1.max(LEGEND_TOP as u32 + LEGEND_ROW as u32 * legend.len() as u32 + 10);
     {
-        let root = SVGBackend::with_string(&mut out, (size.0 + extra, size.1)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (size.0 + extra, height)).into_drawing_area();
         let err = |message: String| PlotError { title: title.into(), message };
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
         let (plot, side) = root.split_horizontally(size.0);
@@ -104,7 +121,7 @@ fn svg(
 fn draw_legend(area: &DrawingArea<SVGBackend, Shift>, entries: &[Entry]) -> Result<(), String> {
     let style = LABEL_FONT.into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
     for (i, entry) in entries.iter().enumerate() {
-        let y = 44 + 18 * i as i32;
+        let y = LEGEND_TOP + LEGEND_ROW * i as i32;
         let c = entry.color;
         match entry.marker {
             Marker::Square => area.draw(&Rectangle::new([(6, y - 5), (16, y + 5)], c.filled())),
@@ -143,6 +160,19 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
         p *= 10.0;
     }
     ticks
+}
+
+/// Tick positions for a log axis of bytes over `lo..hi`: powers of two a power of 4, 16, … apart
+/// (1 KiB, 4 KiB, 16 KiB, …), at most about seven, as binary units read round.
+fn byte_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let (first, last) = (lo.log2().ceil() as i32, hi.log2().floor() as i32);
+    let step = ((last - first) / 6 + 1).max(2);
+    // Aligned to whole KiB, MiB, GiB where the step allows.
+    let start = first + (10 - first % 10).rem_euclid(10) % step;
+    (start..=last).step_by(step as usize).map(|e| 2f64.powi(e)).collect()
 }
 
 /// Tick positions at powers of two over `lo..hi` (voxel resolutions 2^L).
@@ -272,7 +302,10 @@ pub fn scaling(study: &Study) -> Result<String, PlotError> {
             .y_label_area_size(70)
             .build_cartesian_2d(
                 (xr.0..xr.1).log_scale().with_key_points(x_ticks),
-                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
+                (yr.0..yr.1).log_scale().with_key_points(match y_is_bytes {
+                    true => byte_ticks(yr.0, yr.1),
+                    false => log_ticks(yr.0, yr.1),
+                }),
             )
             .map_err(e)?;
         chart
@@ -338,7 +371,7 @@ pub fn speed_memory(title: &str, choices: &[Choice]) -> Result<String, PlotError
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(
-                (xr.0..xr.1).log_scale().with_key_points(log_ticks(xr.0, xr.1)),
+                (xr.0..xr.1).log_scale().with_key_points(byte_ticks(xr.0, xr.1)),
                 (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
             )
             .map_err(e)?;
@@ -523,6 +556,11 @@ mod tests {
         assert_eq!(log_ticks(3.0, 40.0), [5.0, 10.0, 20.0]);
         assert_eq!(log_ticks(1.0, 1e7), [1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6, 1e7]);
         assert_eq!(pow2_ticks(100.0, 2500.0), [128.0, 256.0, 512.0, 1024.0, 2048.0]);
+        let kib = 1024.0;
+        assert_eq!(byte_ticks(40.0 * kib, 9.0 * kib * kib), [64.0 * kib, 256.0 * kib, kib * kib, 4.0 * kib * kib]);
+        let wide = byte_ticks(100.0, 1e10);
+        assert!(wide.len() <= 7 && wide.contains(&(kib * kib)), "{wide:?}");
+        assert!(wide.iter().all(|&t| bytes(t).split(' ').next().is_some_and(|n| !n.contains('.'))), "{wide:?}");
         assert!(log_ticks(0.0, 1.0).is_empty());
     }
 

@@ -143,7 +143,7 @@ td.best { font-weight: 600; color: #1b6e3a; }
 .held { color: #1b6e3a; } .not-held { color: #b3261e; }
 .meta { list-style: none; padding: 0; } .meta li { margin: 2px 0; } .meta b { display: inline-block; min-width: 90px; }
 .note { color: #555; } code { background: #eceff4; padding: 0 3px; border-radius: 3px; }
-.charts { display: flex; flex-wrap: wrap; gap: 10px; } .charts svg { border: 1px solid #e5e9f0; max-width: 100%; height: auto; }
+.charts { display: flex; flex-wrap: wrap; gap: 10px; align-items: flex-start; } .charts svg { border: 1px solid #e5e9f0; max-width: 100%; height: auto; }
 .shots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; padding: 8px; border: 1px solid #e5e9f0; border-radius: 6px; background: #fafbfc; }
 figure .pair { display: flex; gap: 6px; } figure img { width: 200px; height: auto; display: block; background: #222; }
@@ -153,11 +153,18 @@ figcaption { font-weight: 600; margin-bottom: 4px; } .missing { width: 200px; he
   background: linear-gradient(to right, #000 0%, #1a1acc 25%, #d91a1a 50%, #ffd900 75%, #fff 100%); border: 1px solid #999; }
 nav ul { columns: 3; } nav ul ul { columns: 1; } .scroll { overflow-x: auto; }
 .swatch { display: inline-block; width: 12px; height: 12px; border: 1px solid #999; vertical-align: middle; }
+#claims td, #claims th { text-align: left; white-space: normal; min-width: 90px; vertical-align: top; }
+#claims td:nth-child(4) { min-width: 260px; }
+@media (max-width: 700px) {
+  body { padding: 0 10px 32px; } nav ul { columns: 1; } h1 { font-size: 24px; }
+  figure img, .missing { width: 150px; } .shots { gap: 8px; } figure .pair { flex-wrap: wrap; }
+}
 ";
 
 fn page(title: &str, body: &str) -> String {
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{}</title>\n<style>{CSS}</style>\n</head>\n<body>\n{body}</body>\n</html>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>{}</title>\n<style>{CSS}</style>\n</head>\n<body>\n{body}</body>\n</html>\n",
         esc(title)
     )
 }
@@ -208,21 +215,8 @@ fn run_section(out: &mut String, r: &Results) {
         let g = &view.git;
         let dirty = if g.dirty { " (uncommitted changes)" } else { "" };
         let _ = writeln!(out, "<li><b>git</b><code>{}</code>{dirty}</li>", esc(&g.commit));
-        let s = &view.settings;
-        let _ = writeln!(
-            out,
-            "<li><b>settings</b>preset <code>{}</code>, {}×{}, {} threads, {} warm-up + {} timed reps, workloads {}, \
-             harness built <code>{}</code></li>",
-            esc(&s.preset),
-            s.width,
-            s.height,
-            s.threads,
-            s.warmup,
-            s.reps,
-            esc(&s.workloads.join(", ")),
-            esc(&s.build_profile)
-        );
-        let _ = writeln!(out, "<li><b>command</b><code>{}</code></li>", esc(&s.command));
+        let _ = writeln!(out, "<li><b>settings</b>{}</li>", esc(&crate::markdown::settings_text(view)));
+        let _ = writeln!(out, "<li><b>command</b><code>{}</code></li>", esc(&view.settings.command));
     }
     for adapter in crate::gpu::adapters(r) {
         let _ = writeln!(out, "<li><b>GPU</b>{}</li>", esc(&adapter));
