@@ -289,9 +289,10 @@ fn esvo_budget(results: &Results) -> Sheet {
                     source: "seed 000 §5.6",
                     claim: format!("ESVO's bytes per leaf voxel are within {BUDGET_SLACK}× the paper's budget"),
                     subject: format!(
-                        "{}{}",
+                        "{}{}{}",
                         case.scene,
-                        case.resolution.map_or(String::new(), |r| format!(" at {r}³"))
+                        case.resolution.map_or(String::new(), |r| format!(" at {r}³")),
+                        case.variant.as_ref().map_or(String::new(), |v| format!(" [{v}]"))
                     ),
                     expected: format!("{p:.2} B"),
                     ours: format!("{t:.2} B"),

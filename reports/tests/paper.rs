@@ -1,5 +1,5 @@
-//! The paper preset's report on a fixture of a real run (`harness run --preset paper --reps 1
-//! --warmup 0 --no-images`, timing samples stripped; `fixtures/paper.json.gz`): it opens with
+//! The paper preset's report on a fixture of a real run (`harness run --preset paper` on a 2-core
+//! VM, 17 minutes; timing samples stripped; `fixtures/paper.json.gz`): it opens with
 //! "Paper results at a glance", which lists every claim of DESIGN.md §9 that has an
 //! implementation, each held or not held and linked to a table that exists in the page.
 
