@@ -58,8 +58,7 @@ pub fn write_case_images(
         written.push(path);
     }
     if let Some(reference) = reference {
-        let codes: Vec<u8> =
-            frame.pixels().map(|(x, y, s)| crate::agreement::difference(s, reference.at(x, y)).code()).collect();
+        let codes = difference_codes(frame, reference);
         let name = format!("{stem}__diff.png");
         let path = format!("{rel}/{name}");
         let rgb = images::difference_image(&codes);
@@ -70,6 +69,12 @@ pub fn write_case_images(
         written.push(path);
     }
     Ok(written)
+}
+
+/// Per pixel, how the frame's hit compares with the reference frame's, as a difference code
+/// (`reports::images::Difference::code`), row-major.
+pub fn difference_codes(frame: &Frame, reference: &Frame) -> Vec<u8> {
+    frame.pixels().map(|(x, y, s)| crate::agreement::difference(s, reference.at(x, y)).code()).collect()
 }
 
 /// A frame's shaded image, 8-bit RGB, row-major.

@@ -234,8 +234,7 @@ fn heat_shot(dir: &Path, path: &str, scale: u32) -> Result<Shot> {
 
 /// Removes the heat maps of `path` drawn on other scales than `keep`'s.
 fn remove_other_scales(heat_dir: &Path, path: &str, keep: &Path) {
-    let any = images::heat_path(path, 0);
-    let Some(prefix) = any.rsplit_once('/').map(|(_, n)| n.trim_end_matches("0.png").to_string()) else { return };
+    let prefix = images::heat_name_prefix(path);
     let Ok(entries) = fs::read_dir(heat_dir) else { return };
     for entry in entries.flatten() {
         let p = entry.path();
@@ -376,6 +375,15 @@ mod tests {
         let (w, h, rgb) = images::read_rgb(&heat).expect("the heat map");
         assert_eq!((w, h), (512, 512));
         assert!(rgb == images::heat_image(&images::steps_u16(&steps), scale), "{} holds other counts", heat.display());
+        // A structure that takes more steps raises its scene's scale: the scene's maps are drawn
+        // again on it and the old ones removed; other scenes keep theirs.
+        let mut cache = ShotCache::new();
+        results.cases[3 * 12].render[0].steps_p99 = Some(400.0);
+        write_results(&dir, &results, &mut cache).expect("the report is rewritten");
+        let raised = images::nice_scale(400.0);
+        assert!(dir.join(format!("images/heat/s3__x0__cpu__primary__steps-{raised}.png")).is_file());
+        assert!(!heat.exists(), "{} was left behind", heat.display());
+        assert!(dir.join(format!("images/heat/s4__x0__cpu__primary__steps-{scale}.png")).is_file());
         let _ = fs::remove_dir_all(&dir);
     }
 }

@@ -28,16 +28,7 @@ pub fn render_images(args: &RenderArgs) -> Result<()> {
     if args.width == 0 || args.height == 0 {
         bail!("--width and --height must be at least 1");
     }
-    let pixels = u64::from(args.width) * u64::from(args.height);
-    if pixels > u64::from(u32::MAX) {
-        bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
-    }
-    for s in &args.structures {
-        if kernels::structure_family(s).is_none() {
-            let known: Vec<&str> = kernels::structure_names().collect();
-            bail!("unknown structure '{s}' (known: {})", known.join(", "));
-        }
-    }
+    crate::run::check_structures(&args.structures)?;
     let mut given = args.params.clone();
     if let Some(l) = args.levels {
         given.push(format!("voxel.levels={l}"));
@@ -58,12 +49,7 @@ pub fn render_images(args: &RenderArgs) -> Result<()> {
     };
     let budget = Budget::new(args.memory_limit);
     // Each structure's frame and steps are kept until its scene is done, with the reference's.
-    let frames = args.structures.len() as u64 + 1;
-    budget.check(
-        format!("{frames} frames of {}×{}", args.width, args.height),
-        budget::frame_bytes(args.width, args.height).saturating_mul(frames),
-        "a smaller --width/--height or fewer --structures",
-    )?;
+    crate::run::check_frames(&budget, args.width, args.height, args.structures.len() as u64 + 1)?;
     let out = args.out.clone().unwrap_or_else(|| {
         let now = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
         PathBuf::from("results")
@@ -139,8 +125,7 @@ fn scene_images(
             written.push(name);
         }
         if let Some(reference) = reference.as_ref().filter(|_| r.structure != REFERENCE) {
-            let codes: Vec<u8> =
-                r.frame.pixels().map(|(x, y, s)| crate::agreement::difference(s, reference.at(x, y)).code()).collect();
+            let codes = crate::images::difference_codes(&r.frame, reference);
             let name = format!("{stem}__diff.png");
             write(&name, &images::difference_image(&codes))?;
             written.push(name);

@@ -59,16 +59,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     };
     let budget = Budget::new(args.memory_limit);
     for part in &parts {
-        let (width, height) = (part.plan.width, part.plan.height);
-        let pixels = u64::from(width) * u64::from(height);
-        if pixels > u64::from(u32::MAX) {
-            bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
-        }
-        budget.check(
-            format!("a {width}×{height} frame"),
-            budget::frame_bytes(width, height),
-            "a smaller --width/--height",
-        )?;
+        check_frames(&budget, part.plan.width, part.plan.height, 1)?;
     }
 
     let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
@@ -374,13 +365,34 @@ fn check_optimised(allow: bool) -> Result<()> {
     Ok(())
 }
 
-fn validate(plan: &Plan) -> Result<()> {
-    for s in &plan.structures {
+/// Refuses a structure name the registry does not know, listing those it does.
+pub(crate) fn check_structures(structures: &[String]) -> Result<()> {
+    for s in structures {
         if kernels::structure_family(s).is_none() {
             let known: Vec<&str> = kernels::structure_names().collect();
             bail!("unknown structure '{s}' (known: {})", known.join(", "));
         }
     }
+    Ok(())
+}
+
+/// Refuses an image whose rays a `u32` cannot index, or whose `frames` frames do not fit the
+/// budget.
+pub(crate) fn check_frames(budget: &Budget, width: u32, height: u32, frames: u64) -> Result<()> {
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels > u64::from(u32::MAX) {
+        bail!("--width × --height is {pixels} pixels; rays are indexed by u32, so at most {} fit", u32::MAX);
+    }
+    let what = match frames {
+        1 => format!("a {width}×{height} frame"),
+        n => format!("{n} frames of {width}×{height}"),
+    };
+    budget.check(what, budget::frame_bytes(width, height).saturating_mul(frames), "a smaller --width/--height")?;
+    Ok(())
+}
+
+fn validate(plan: &Plan) -> Result<()> {
+    check_structures(&plan.structures)?;
     if plan.width == 0 || plan.height == 0 || plan.reps == 0 || plan.threads == 0 {
         bail!("--width, --height, --reps and --threads must be at least 1");
     }

@@ -8,6 +8,7 @@ use std::fmt::Write;
 
 use crate::claims::{self, Claim};
 use crate::merge;
+use crate::scaling::{self, Study};
 use crate::schema::{Part, Results};
 
 /// A chapter: the whole run, or one part of it.
@@ -24,6 +25,8 @@ pub struct Chapter {
     pub reproductions: Vec<(Option<String>, String)>,
     /// Their claims, each with the anchor prefix of its reproduction.
     pub claims: Vec<(String, Claim)>,
+    /// The chapter's scaling studies.
+    pub studies: Vec<Study>,
 }
 
 impl Chapter {
@@ -72,7 +75,8 @@ fn chapter(part: Option<Part>, results: Results, prefix: String) -> Chapter {
         reproductions.push((tag, claims::with_anchors(&sheet.markdown, &anchor_prefix)));
         claims.extend(sheet.claims.into_iter().map(|c| (anchor_prefix.clone(), c)));
     }
-    Chapter { part, results, prefix, reproductions, claims }
+    let studies = scaling::studies(&results);
+    Chapter { part, results, prefix, reproductions, claims, studies }
 }
 
 /// "Paper results at a glance" in Markdown: one row per claim (its subjects together), the

@@ -93,9 +93,15 @@ pub const STEPS_RAW: &str = "__steps16";
 /// Where the raw step counts at `path` go coloured on `scale`: `heat/<stem>__steps-<scale>.png`
 /// beside them (the report draws it when a scene's scale is known).
 pub fn heat_path(path: &str, scale: u32) -> String {
-    let (dir, name) = split(path);
-    let stem = name.trim_end_matches(".png").trim_end_matches(STEPS_RAW);
-    join(dir, "heat", &format!("{stem}__steps-{scale}.png"))
+    let (dir, _) = split(path);
+    join(dir, "heat", &format!("{}{scale}.png", heat_name_prefix(path)))
+}
+
+/// The file name of the raw step counts at `path` coloured on any scale, up to the scale:
+/// `<stem>__steps-`.
+pub fn heat_name_prefix(path: &str) -> String {
+    let stem = split(path).1.trim_end_matches(".png").trim_end_matches(STEPS_RAW);
+    format!("{stem}__steps-")
 }
 
 fn split(path: &str) -> (&str, &str) {

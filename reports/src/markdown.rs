@@ -93,7 +93,7 @@ pub fn report(results: &Results) -> String {
             }
             body.push_str(md);
         }
-        scaling_section(&mut body, &chapter.results);
+        scaling_section(&mut body, &chapter.studies);
         for scene in chapter.results.scenes() {
             scene_section(&mut body, &chapter.results.scene_cases(scene));
         }
@@ -158,15 +158,14 @@ pub(crate) fn settings_text(r: &Results) -> String {
 }
 
 /// The fitted exponent of every scaling study (the plots are in report.html).
-fn scaling_section(out: &mut String, results: &Results) {
-    let studies = scaling::studies(results);
+fn scaling_section(out: &mut String, studies: &[scaling::Study]) {
     if studies.is_empty() {
         return;
     }
     let _ = writeln!(out, "## Scaling\n");
     let _ = writeln!(out, "Exponent k of y ∝ x^k, least squares on log–log (1 = linear); plots in report.html.\n");
     let _ = writeln!(out, "| study | structure | points | k |\n|---|---|---:|---:|");
-    for s in &studies {
+    for s in studies {
         for series in &s.series {
             let k = series.exponent.map_or("—".into(), |k| match s.x {
                 Axis::Triangles => format!("{k:.2}"),

@@ -10,6 +10,7 @@ use std::fmt::Write;
 use base64::Engine;
 
 use crate::chapters;
+use crate::claims::anchor;
 use crate::images;
 use crate::markdown::per_ray;
 use crate::merge;
@@ -103,9 +104,8 @@ fn chapter_body(out: &mut String, chapter: &chapters::Chapter, images: &Shots) {
         }
         out.push_str("</section>\n");
     }
-    let studies = scaling::studies(results);
-    if !studies.is_empty() {
-        scaling_section(out, &studies, prefix);
+    if !chapter.studies.is_empty() {
+        scaling_section(out, &chapter.studies, prefix);
     }
     for scene in &scenes {
         scene_section(out, &results.scene_cases(scene), images, prefix);
@@ -185,13 +185,6 @@ pub fn esc(s: &str) -> String {
     out
 }
 
-/// An anchor id from a name: letters and digits kept, everything else `-`.
-fn anchor(prefix: &str, name: &str) -> String {
-    let slug: String =
-        name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '-' }).collect();
-    format!("{prefix}-{slug}")
-}
-
 fn run_section(out: &mut String, r: &Results) {
     let _ = writeln!(out, "<h1>accel-bench report</h1>\n<ul class=\"meta\">");
     let _ = writeln!(out, "<li><b>run</b><code>{}</code>, started {}</li>", esc(&r.run_id), esc(&r.created));
@@ -262,7 +255,7 @@ fn chapter_contents(chapter: &chapters::Chapter) -> String {
     if !chapter.reproductions.is_empty() {
         let _ = writeln!(out, "<li><a href=\"#{prefix}paper\">Paper reproductions</a></li>");
     }
-    if !scaling::studies(&chapter.results).is_empty() {
+    if !chapter.studies.is_empty() {
         let _ = writeln!(out, "<li><a href=\"#{prefix}scaling\">Scaling</a></li>");
     }
     for s in chapter.results.scenes() {
