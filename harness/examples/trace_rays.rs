@@ -48,5 +48,24 @@ fn main() -> anyhow::Result<()> {
     let (hits, sum) = trace_all(accel.as_ref(), &camera, size);
     let ms = start.elapsed().as_secs_f64() * 1e3;
     println!("{scene_name} {size}² {structure}: {hits} hits, checksum {sum:016x}, {ms:.1} ms on one thread");
+    // The counts per ray, from a second, counting pass (not timed).
+    let mut c = kernels::Counters::default();
+    for y in 0..size {
+        for x in 0..size {
+            accel.intersect_counted(&camera.ray(x, y), 0.0, f32::INFINITY, &mut c);
+        }
+    }
+    let rays = f64::from(size * size);
+    let per = |n: u64| n as f64 / rays;
+    let levels: Vec<String> = c.steps_by_level.iter().map(|&n| format!("{:.2}", per(n))).collect();
+    println!(
+        "per ray: {:.2} steps, {:.2} visits, {:.2} tests, {:.2} pushes, {:.2} pops; empty steps by level [{}]",
+        per(c.steps),
+        per(c.node_visits),
+        per(c.prim_tests),
+        per(c.pushes),
+        per(c.pops),
+        levels.join(", ")
+    );
     Ok(())
 }

@@ -327,7 +327,7 @@ mod tests {
         };
         let (reference, _) = frame_of("bvh");
         let (frame, counters) = frame_of("svo");
-        let steps: Vec<f32> = frame.pixels().map(|(x, y, _)| counters.at(&frame, x, y).steps as f32).collect();
+        let steps: Vec<f32> = frame.pixels().map(|(x, y, _)| counters.steps_at(&frame, x, y) as f32).collect();
         let dir = temp_dir("report-size");
         let what = CaseImages { frame: &frame, steps: &steps, reference: Some(&reference) };
         let first = write_case_images(&dir.join("images"), "images", "s0__x__cpu__primary", what, |_| None)

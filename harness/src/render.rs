@@ -97,7 +97,7 @@ fn scene_images(
         let steps = accel
             .counted()
             .steps
-            .then(|| frame.pixels().map(|(x, y, _)| counters.at(&frame, x, y).steps as f32).collect::<Vec<f32>>());
+            .then(|| frame.pixels().map(|(x, y, _)| counters.steps_at(&frame, x, y) as f32).collect::<Vec<f32>>());
         rendered.push(Rendered { structure: structure.clone(), frame, steps });
     }
     // The difference views compare primary hits with the reference's on the same rays.

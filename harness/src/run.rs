@@ -765,7 +765,7 @@ fn timed_renders(
     let totals = counters.total();
     let rays = counted.rays as f64;
     let timing = Timing::from_samples(&samples);
-    let heat: Vec<f32> = counted.pixels().map(|(x, y, _)| counters.at(&counted, x, y).steps as f32).collect();
+    let heat: Vec<f32> = counted.pixels().map(|(x, y, _)| counters.steps_at(&counted, x, y) as f32).collect();
     let stats = RenderStats {
         backend: "cpu".into(),
         device: device.to_string(),

@@ -8,13 +8,17 @@
 //! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |
 //! | `esvo` | [`cpu::esvo`] (over [`cpu::octree_cast`]) | `gpu/esvo.wgsl` (over `gpu/octree_cast.wgsl`; beam pre-pass `esvo_beam`) |
 //! | `svdag` | [`cpu::svdag`] (over [`cpu::octree_cast`]) | `gpu/svdag.wgsl` (over `gpu/octree_cast.wgsl`) |
+//! | `vdb` | [`cpu::vdb`] (over [`cpu::wide_dda`]) | `gpu/vdb.wgsl` (over `gpu/wide_dda.wgsl`) |
+//! | `tree64` | [`cpu::tree64`] (over [`cpu::wide_dda`]) | `gpu/tree64.wgsl` (over `gpu/wide_dda.wgsl`) |
+//! | `brickmap` | [`cpu::brickmap`] (over [`cpu::wide_dda`]) | `gpu/brickmap.wgsl` (over `gpu/wide_dda.wgsl`) |
 //! | `obvhs` | [`cpu::obvhs`] (the crate's own BVH2 traversal) | — |
 //! | `cwbvh` | [`cpu::obvhs`] (the crate's own CWBVH traversal) | `gpu/cwbvh.wgsl` |
 //! | `embree` | [`cpu::embree`] (Embree 3, loaded at run time) | — |
 //!
 //! Both triangle kernels share `gpu/triangle.wgsl` (the watertight test of [`cpu::triangle`]) and
 //! `gpu/slab.wgsl` ([`cpu::slab`]); the voxel kernels share `gpu/octree_ray.wgsl` (the mirrored
-//! `[1,2]³` frame of [`cpu::octree_ray`]), and their bindings are in `gpu/voxel.rs`. The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
+//! `[1,2]³` frame of [`cpu::octree_ray`]), and their bindings are in `gpu/voxel.rs` (the
+//! hierarchical grids' in `gpu/wide.rs`). The voxel oracle is [`cpu::voxel_dda`]; the triangle oracle
 //! [`cpu::brute_force`].
 //!
 //! [`Traverse`] is the kernel side of a structure's contract (the build/memory side is
@@ -33,7 +37,7 @@ pub use registry::{
     Accel, QUERY_STRUCTURES, QueryEntry, STRUCTURES, StructureEntry, build_structure, find_query_structure,
     find_structure, param_keys, structure_check, structure_family, structure_names,
 };
-pub use stats::{Counters, MAX_STEPS, NoStats, Stats};
+pub use stats::{Counters, LEVEL_STEPS, MAX_STEPS, NoStats, Stats};
 
 /// The nearest intersection found along a ray (DESIGN.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]

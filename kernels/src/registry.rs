@@ -165,6 +165,37 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
     StructureEntry {
+        name: "vdb",
+        family: "voxel",
+        summary: "OpenVDB/NanoVDB tree (seed 003): root table, interior nodes with child masks, bit-mask leaves, \
+                  hierarchical DDA; --levels L, vdb.log2=5,4,3 (any split, e.g. 4,3,3 or 3,3,3,3), \
+                  vdb.tables=dense (NanoVDB's direct-access tables)|compact (mask + popcount rank), \
+                  vdb.skip=child (NanoVDB's HDDA)|block (also empty blocks of 2-8 children per axis)",
+        params: &["voxel.levels", "vdb.log2", "vdb.tables", "vdb.skip"],
+        check: |p| structures::vdb::VdbParams::from_params(p).map(drop),
+        build: |input| Ok(Box::new(structures::vdb::Vdb::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
+        name: "tree64",
+        family: "voxel",
+        summary: "sparse 64-tree (seed 003's wide grids): 4³ children, 64-bit masks, packed child lists, 4³ bit \
+                  bricks, hierarchical DDA; --levels L, tree64.dag=on merges equal subtrees",
+        params: &["voxel.levels", "tree64.dag"],
+        check: |p| structures::tree64::Tree64Params::from_params(p).map(drop),
+        build: |input| Ok(Box::new(structures::tree64::Tree64::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
+        name: "brickmap",
+        family: "voxel",
+        summary: "brickmap (van Wingerden 2015): dense top grid of pointers to 8³ bit bricks, two-level DDA; --levels L",
+        params: &["voxel.levels"],
+        check: |p| structures::brickmap::level_param(p).map(drop),
+        build: |input| Ok(Box::new(structures::brickmap::Brickmap::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
         name: "svdag-temporal",
         family: "voxel",
         summary: "temporal SVDAG (seed 001 §4): every frame of an animated scene (--frames N) merged into one DAG, \

@@ -29,6 +29,9 @@ pub trait Stats {
     fn pop(&mut self);
     /// The ray reached its kernel's iteration bound ([`MAX_STEPS`]) and was ended as a miss.
     fn at_bound(&mut self);
+    /// One step over an empty cell at `level` of a hierarchy of grids (0 = its top cells): where
+    /// the hierarchical DDA skips space ([`Counters::steps_by_level`]).
+    fn level_step(&mut self, level: usize);
     /// Adds counts gathered elsewhere (a per-frame pre-pass).
     fn add(&mut self, counters: &Counters);
 }
@@ -51,6 +54,8 @@ impl Stats for NoStats {
     #[inline(always)]
     fn at_bound(&mut self) {}
     #[inline(always)]
+    fn level_step(&mut self, _level: usize) {}
+    #[inline(always)]
     fn add(&mut self, _counters: &Counters) {}
 }
 
@@ -64,7 +69,14 @@ pub struct Counters {
     pub pops: u64,
     /// Rays ended at the iteration bound (see [`MAX_STEPS`]); 0 for every sound structure.
     pub rays_at_bound: u64,
+    /// Steps over empty cells per level of a hierarchical grid (`vdb`, `tree64`, `brickmap`),
+    /// top cells first, the voxels last; the deepest levels share the last entry. Zero for
+    /// every other structure.
+    pub steps_by_level: [u64; LEVEL_STEPS],
 }
+
+/// Levels [`Counters::steps_by_level`] tells apart.
+pub const LEVEL_STEPS: usize = 8;
 
 impl Stats for Counters {
     #[inline(always)]
@@ -92,6 +104,10 @@ impl Stats for Counters {
         self.rays_at_bound += 1;
     }
     #[inline(always)]
+    fn level_step(&mut self, level: usize) {
+        self.steps_by_level[level.min(LEVEL_STEPS - 1)] += 1;
+    }
+    #[inline(always)]
     fn add(&mut self, counters: &Counters) {
         *self += *counters;
     }
@@ -105,5 +121,8 @@ impl AddAssign for Counters {
         self.pushes += o.pushes;
         self.pops += o.pops;
         self.rays_at_bound += o.rays_at_bound;
+        for (a, b) in self.steps_by_level.iter_mut().zip(o.steps_by_level) {
+            *a += b;
+        }
     }
 }

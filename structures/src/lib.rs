@@ -15,17 +15,26 @@
 //! | [`svdag`] | sparse voxel DAG: bottom-up merge, sub-DAG streaming build | §4.4, seed 001 |
 //! | [`obvhs`] | the obvhs crate's own BVH2 and CWBVH, as shipped (`obvhs`, `cwbvh` rows) | issue 14 |
 //! | [`embree`] | Embree 3, loaded at run time (`embree` row) | §2, issue 14 |
+//! | [`vdb`] | OpenVDB/NanoVDB tree (root table, 5-4-3 interior nodes, mask leaves) | seed 003, issue 28 |
+//! | [`tree64`] | sparse 64-tree (4³ children, 64-bit masks), or its DAG | seed 003, issue 28 |
+//! | [`brickmap`] | two-level voxel grid: dense top grid of 8³ bit bricks | seed 003, issue 28 |
+//!
+//! The three hierarchical voxel grids share their shape and streamed build ([`voxel::wide`]).
 
+pub mod brickmap;
 pub mod bvh;
 pub mod embree;
 pub mod esvo;
 pub mod grid;
+pub(crate) mod intern;
 pub mod memory;
 pub mod obvhs;
 pub mod params;
 pub mod svdag;
 pub mod svo;
 pub mod svo_naive;
+pub mod tree64;
+pub mod vdb;
 pub mod voxel;
 
 use std::sync::Arc;

@@ -27,3 +27,10 @@ impl MemoryReport {
         self.components.iter().map(|(_, b)| b).sum()
     }
 }
+
+/// Bytes per voxel of each component, in the report's order: a voxel structure's
+/// `bytes_per_voxel_by_component`, so memory per voxel compares across structures part by part.
+pub fn per_voxel(memory: &MemoryReport, voxels: u64) -> serde_json::Map<String, serde_json::Value> {
+    let voxels = voxels.max(1) as f64;
+    memory.components.iter().map(|(name, bytes)| (name.clone(), serde_json::json!(*bytes as f64 / voxels))).collect()
+}

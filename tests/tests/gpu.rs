@@ -238,3 +238,50 @@ fn svdag_temporal_frames() {
     }
     assert!(failures.is_empty(), "temporal SVDAG frames differ from the CPU:\n{}", failures.join("\n"));
 }
+
+/// The hierarchical voxel grids' switches beyond the defaults the per-scene test builds with: the
+/// VDB's compact tables, coalesced skipping and other splits, the 64-tree's DAG; and every one's
+/// words split over several bindings, so the generated accessors' chunking is exercised. The
+/// GPU runs the same DDA as the CPU, so hits must agree exactly.
+#[test]
+fn voxel_grid_variants() {
+    let Some(ctx) = context_for_tests("gpu::voxel_grid_variants") else {
+        return;
+    };
+    let variants: [(&str, &str, &[&str]); 6] = [
+        ("vdb-compact", "vdb", &["vdb.tables=compact"]),
+        ("vdb-block", "vdb", &["vdb.tables=compact", "vdb.skip=block"]),
+        ("vdb-3333", "vdb", &["vdb.log2=3,3,3,3", "vdb.skip=block"]),
+        ("vdb-433", "vdb", &["vdb.log2=4,3,3", "vdb.tables=dense"]),
+        ("tree64-dag", "tree64", &["tree64.dag=on"]),
+        ("brickmap", "brickmap", &[]),
+    ];
+    let mut failures = Vec::new();
+    for name in ["bunny", "dragon-11k", "menger", "room"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        for (label, structure, extra) in variants {
+            let entry = kernels::find_structure(structure).expect("registered");
+            let params = Params::parse(["voxel.levels=10"].iter().chain(extra).copied()).expect("params");
+            let t = Instant::now();
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {label}: {e}"));
+            failures.extend(compare(ctx, name, label, accel.as_ref(), &camera, &shade, t));
+            let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
+            let words = accel.memory().total_bytes() / 4;
+            let chunk = (words as usize).div_ceil(5).max(64);
+            for split_words in [None, Some(chunk)] {
+                let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words };
+                let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
+                    .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
+                    .expect("a GPU program");
+                let d = diff(&gpu.frame, &cpu);
+                if d.hit_mismatches > 0 || d.prim_mismatches > 0 {
+                    failures.push(format!("{name} {label} over bindings of {split_words:?} words: not exact: {d:?}"));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "hierarchical grid variants differ from the CPU:\n{}", failures.join("\n"));
+}

@@ -1,6 +1,7 @@
 //! CPU kernels, one file per structure, plus the shared triangle test, the brute-force oracle and
 //! the tile renderer.
 
+pub mod brickmap;
 pub mod brute_force;
 pub mod bvh;
 pub mod embree;
@@ -15,5 +16,8 @@ pub mod svdag;
 pub mod svdag_shadow;
 pub mod svo;
 pub mod svo_naive;
+pub mod tree64;
 pub mod triangle;
+pub mod vdb;
 pub mod voxel_dda;
+pub mod wide_dda;

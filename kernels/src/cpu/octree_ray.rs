@@ -116,3 +116,25 @@ pub fn unmirror(p: Vec3, mirror_mask: u32) -> Vec3 {
     let m = |a: usize| if mirror_mask >> a & 1 == 1 { 3.0 - p[a] } else { p[a] };
     Vec3::new(m(0), m(1), m(2))
 }
+
+/// The normal of the face through which the octree-space `ray` entered the voxel cube at
+/// `cube_min` (world-oriented) of side `cube_size`: the axis whose entry plane is crossed last (a
+/// ray starting inside the voxel gets the same rule). What the voxel structures that store no
+/// normal (`svdag`, the hierarchical grids) report.
+pub fn face_normal(ray: &Ray, cube_min: Vec3, cube_size: f32) -> Vec3 {
+    let mut best = (f32::NEG_INFINITY, Vec3::ZERO);
+    for a in 0..3 {
+        let d = ray.dir[a];
+        if d == 0.0 {
+            continue;
+        }
+        let plane = if d > 0.0 { cube_min[a] } else { cube_min[a] + cube_size };
+        let t = (plane - ray.origin[a]) / d;
+        if t > best.0 {
+            let mut n = Vec3::ZERO;
+            n[a] = -d.signum();
+            best = (t, n);
+        }
+    }
+    best.1
+}

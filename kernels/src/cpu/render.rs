@@ -155,19 +155,23 @@ impl Frame {
     }
 }
 
-/// Per-pixel counters of a counting render, in the frame's pixel order (see [`Frame::at`]).
+/// What a counting render counted: the steps of every pixel (the heat maps), in the frame's
+/// pixel order (see [`Frame::at`]), and every counter summed per tile (4 bytes a pixel rather
+/// than a whole [`Counters`] each).
 pub struct CounterImage {
-    counters: Vec<Counters>,
+    steps: Vec<u32>,
+    tiles: Vec<Counters>,
 }
 
 impl CounterImage {
-    pub fn at(&self, frame: &Frame, x: u32, y: u32) -> &Counters {
-        &self.counters[frame.index(x, y)]
+    /// Traversal steps of pixel `(x, y)`'s rays (saturating at `u32::MAX`).
+    pub fn steps_at(&self, frame: &Frame, x: u32, y: u32) -> u32 {
+        self.steps[frame.index(x, y)]
     }
 
     /// Sum over all pixels.
     pub fn total(&self) -> Counters {
-        self.counters.iter().fold(Counters::default(), |mut acc, c| {
+        self.tiles.iter().fold(Counters::default(), |mut acc, c| {
             acc += *c;
             acc
         })
@@ -200,11 +204,12 @@ pub fn render_counted(
     ctx: &ShadeContext,
     workload: Workload,
 ) -> (Frame, CounterImage) {
-    let mut counters = vec![Counters::default(); Frame::sample_count(camera.width, camera.height)];
+    let pixels = Frame::sample_count(camera.width, camera.height);
+    let mut image = CounterImage { steps: vec![0; pixels], tiles: vec![Counters::default(); pixels / TILE_PIXELS] };
     let mut frame = Frame::new(camera.width, camera.height);
-    render_tiles(accel, camera, ctx, workload, Some(&mut counters), &mut frame.samples);
+    render_tiles(accel, camera, ctx, workload, Some(&mut image), &mut frame.samples);
     frame.rays = frame.count_rays(workload);
-    (frame, CounterImage { counters })
+    (frame, image)
 }
 
 fn render_tiles(
@@ -212,17 +217,21 @@ fn render_tiles(
     camera: &Camera,
     ctx: &ShadeContext,
     workload: Workload,
-    counters: Option<&mut [Counters]>,
+    mut counters: Option<&mut CounterImage>,
     samples: &mut [Sample],
 ) {
     let (w, h) = (camera.width, camera.height);
     debug_assert_eq!(samples.len(), Frame::sample_count(w, h));
-    let mut counters = counters;
+    let mut prepass = Counters::default();
     let starts = match workload {
-        // The pre-pass's work is charged to the first pixel's counters (totals stay exact).
-        Workload::Primary => accel.primary_starts(camera, counters.as_deref_mut().and_then(|c| c.first_mut())),
+        // The pre-pass's work is charged to the first pixel and tile (totals stay exact).
+        Workload::Primary => accel.primary_starts(camera, counters.is_some().then_some(&mut prepass)),
         _ => None,
     };
+    if let Some(image) = counters.as_deref_mut() {
+        image.steps[0] = saturate(prepass.steps);
+        image.tiles[0] = prepass;
+    }
     let start = |x: u32, y: u32| starts.as_ref().map_or(0.0, |s| s[(y * w + x) as usize]);
     match counters {
         // A packet tracer casts each tile's primary rays together (neighbouring pixels, the
@@ -257,19 +266,27 @@ fn render_tiles(
                 }
             }
         }),
-        Some(counters) => {
-            samples.par_chunks_mut(TILE_PIXELS).zip(counters.par_chunks_mut(TILE_PIXELS)).enumerate().for_each(
-                |(tile, (out, cnt))| {
-                    for (i, (s, c)) in out.iter_mut().zip(cnt.iter_mut()).enumerate() {
-                        let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
-                        if x < w && y < h {
-                            *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), Some(c));
-                        }
+        Some(image) => samples
+            .par_chunks_mut(TILE_PIXELS)
+            .zip(image.steps.par_chunks_mut(TILE_PIXELS))
+            .zip(image.tiles.par_iter_mut())
+            .enumerate()
+            .for_each(|(tile, ((out, steps), total))| {
+                for (i, (s, pixel_steps)) in out.iter_mut().zip(steps.iter_mut()).enumerate() {
+                    let (x, y) = Frame::pixel_of(w, tile * TILE_PIXELS + i);
+                    if x < w && y < h {
+                        let mut c = Counters::default();
+                        *s = shade_pixel(accel, camera, ctx, workload, x, y, start(x, y), Some(&mut c));
+                        *pixel_steps = saturate(u64::from(*pixel_steps) + c.steps);
+                        *total += c;
                     }
-                },
-            )
-        }
+                }
+            }),
     }
+}
+
+fn saturate(n: u64) -> u32 {
+    n.min(u64::from(u32::MAX)) as u32
 }
 
 /// Pixel `i` (row-major within the tile) of the tile whose corner is `corner`: the tile's corner

@@ -10,15 +10,14 @@
 //! belong to a brick's child (bricks) or a bottom mask word (bits); children one scale up belong
 //! to a brick.
 
-use glam::Vec3;
 use scenes::{Camera, Ray};
 use structures::svdag::layout::{CHILD_MASK, brick_byte, brick_child_mask, brick_mask, pointer_index};
 use structures::svdag::temporal::{Frame, TemporalSvdag};
 use structures::svdag::{Leaves, Root, Svdag};
 use structures::voxel::morton;
 
-use super::octree_cast::{CastHit, CastNodes, CastOptions, cast};
-use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
+use super::octree_cast::{CastNodes, CastOptions, cast};
+use super::octree_ray::{OctreeRay, S_MAX, face_normal, span_is_empty};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -70,26 +69,6 @@ impl CastNodes for DagNodes<'_> {
     }
 }
 
-/// The normal of the face through which the octree-space ray entered the hit voxel's cube: the
-/// axis whose entry plane is crossed last (a ray starting inside the voxel gets the same rule).
-fn face_normal(ray: &Ray, h: &CastHit<u32>) -> Vec3 {
-    let mut best = (f32::NEG_INFINITY, Vec3::ZERO);
-    for a in 0..3 {
-        let d = ray.dir[a];
-        if d == 0.0 {
-            continue;
-        }
-        let plane = if d > 0.0 { h.cube_min[a] } else { h.cube_min[a] + h.cube_size };
-        let t = (plane - ray.origin[a]) / d;
-        if t > best.0 {
-            let mut n = Vec3::ZERO;
-            n[a] = -d.signum();
-            best = (t, n);
-        }
-    }
-    best.1
-}
-
 /// Casts `ray` from `root` (a temporal SVDAG's frame, or the plain DAG's only root).
 fn trace<S: Stats>(dag: &Svdag, root: Root, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     // A NaN span is empty (the clip below would drop a NaN bound).
@@ -107,7 +86,7 @@ fn trace<S: Stats>(dag: &Svdag, root: Root, ray: &Ray, t_min: f32, t_max: f32, s
     // Only the box the leaves occupy can hold a hit (exact, as in `cpu::esvo`).
     let (enter, exit) = r.box_span(root.occupied[0], root.occupied[1]);
     let h = cast(&nodes, &oray, &r, t_min.max(enter), t_max.min(exit), CastOptions::default(), None, stats)?;
-    Some(Hit { t: h.t, normal: face_normal(&oray, &h), prim: morton::encode(h.coords) })
+    Some(Hit { t: h.t, normal: face_normal(&oray, h.cube_min, h.cube_size), prim: morton::encode(h.coords) })
 }
 
 impl Traverse for Svdag {

@@ -29,6 +29,7 @@ pub mod render;
 #[cfg(test)]
 mod tests;
 pub(crate) mod voxel;
+pub(crate) mod wide;
 
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;

@@ -22,13 +22,11 @@
 //! Both meet the nodes of each level in Morton order and append a new unique node when first met,
 //! so both produce the same words.
 
-use std::hash::BuildHasher;
-
-use foldhash::fast::FixedState;
 use hashbrown::HashTable;
 use rayon::prelude::*;
 
 use super::layout::{BRICK_LEVELS, Leaves, NodeKind, brick_words, node_words};
+use crate::intern::{Interned, intern, reserve};
 use crate::voxel::Octree;
 
 /// One level's unique nodes.
@@ -51,15 +49,6 @@ pub struct LevelStore {
 /// The fewest nodes a parallel run of [`LevelStore::intern_all`] takes: below this, splitting
 /// costs more than it saves.
 const MIN_RUN: usize = 1 << 14;
-
-/// The fixed-seed foldhash every level uses (the layout never depends on hash values: nodes are
-/// ordered by first occurrence).
-const HASHER: FixedState = FixedState::with_seed(0x5dac_0001);
-
-#[inline(always)]
-fn hash(key: &[u32]) -> u64 {
-    HASHER.hash_one(key)
-}
 
 impl LevelStore {
     pub fn new(kind: NodeKind) -> Self {
@@ -88,25 +77,14 @@ impl LevelStore {
             self.unique += 1;
             return offset;
         }
-        let h = hash(key);
-        let words = &self.words;
-        let kind = self.kind;
-        let entry = self.table.entry(
-            h,
-            |&o| {
-                let o = o as usize;
-                words[o] == key[0] && words[o..o + key.len()] == *key
-            },
-            |&o| {
-                let o = o as usize;
-                hash(&words[o..o + node_words(kind, words[o])])
-            },
-        );
-        match entry {
-            hashbrown::hash_table::Entry::Occupied(e) => *e.get(),
-            hashbrown::hash_table::Entry::Vacant(e) => {
-                let offset = self.words.len() as u32;
-                e.insert(offset);
+        let (words, kind) = (&self.words, self.kind);
+        let found = intern(&mut self.table, key, words.len() as u32, |o| {
+            let o = o as usize;
+            &words[o..o + node_words(kind, words[o])]
+        });
+        match found {
+            Interned::Found(offset) => offset,
+            Interned::New(offset) => {
                 self.words.extend_from_slice(key);
                 self.unique += 1;
                 offset
@@ -142,8 +120,9 @@ impl LevelStore {
         // nor the words grow (and rehash or copy) while merging.
         let (nodes, words) = local.iter().fold((0, 0), |(n, w), (s, _)| (n + s.unique as usize, w + s.words.len()));
         let level_words = &self.words;
-        self.table.reserve(nodes, |&o| {
-            hash(&level_words[o as usize..o as usize + node_words(kind, level_words[o as usize])])
+        reserve(&mut self.table, nodes, |o| {
+            let o = o as usize;
+            &level_words[o..o + node_words(kind, level_words[o])]
         });
         self.words.reserve(words);
         let mut out = Vec::with_capacity(n);

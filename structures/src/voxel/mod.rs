@@ -12,6 +12,7 @@
 pub mod morton;
 pub mod octree;
 mod voxelize;
+pub mod wide;
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,375 @@
+//! The hierarchical DDA (Museth, "Hierarchical digital differential analyzer for efficient
+//! ray-marching in OpenVDB", SIGGRAPH 2014 talk; NanoVDB's `HDDA`) over the fixed-depth wide
+//! trees of `structures::voxel::wide` — `vdb`, `tree64`, `brickmap` — generic over their node
+//! layouts ([`WideNodes`]), as [`super::octree_cast`] is over the octrees'.
+//!
+//! One 3-D DDA (Amanatides & Woo) whose cell is the empty region the ray is in: it steps over a
+//! cell of the level it is at when the cell is empty, descends into an occupied one (the child the
+//! ray is in at the current `t`), and climbs back up when a step leaves the parent — so empty
+//! space is skipped at its own level (a whole top node, a lower node, a leaf) and voxel steps
+//! happen only inside occupied leaves. The stack of nodes per level is NanoVDB's accessor cache:
+//! climbing up costs nothing.
+//!
+//! Exactness: the DDA runs in [`OctreeRay`]'s mirrored frame (every direction component
+//! negative) on integer voxel coordinates, and every plane distance goes through
+//! [`OctreeRay::plane_t`] of the exact dyadic plane coordinate `1 + k·2^-L`, as the octree
+//! casters and the voxel DDA oracle compute them. Descending picks, per axis, the child whose
+//! lower plane the ray has not yet crossed at `t` — the octree casters' rule ("upper child iff the
+//! centre plane's `t > t_min`") applied to several binary levels at once — and a step crosses
+//! every axis whose exit ties the cell's. So the hit voxel and its `t` are the octree casters',
+//! bit for bit (`tests/tests/voxel_grids.rs`).
+
+use glam::Vec3;
+use scenes::Ray;
+use structures::voxel::wide::{DdaLevels, MAX_DDA_LEVELS, local_slot, spread10};
+use structures::voxel::{VoxelGrid, morton};
+
+use super::octree_ray::{OctreeRay, face_normal, span_is_empty};
+use crate::{Hit, Stats};
+
+/// What the DDA needs from a wide tree's layout. Levels are numbered from the top cells (0) to
+/// the voxels; below the top, a cell is named by its slot in its parent, the local Morton code
+/// of its place there ([`local_slot`]).
+pub trait WideNodes {
+    /// A handle to a node: the data of one occupied cell, whose children the next level's cells are.
+    type Node: Copy + Default;
+    /// The node's data the loop reads, fetched once per node entered.
+    type Desc: Copy + Default;
+
+    /// The node of the top cell at `cell` (coordinates in top cells), `None` if it is empty (a
+    /// table read: a root-table search, a dense grid's entry).
+    fn top(&self, cell: [u32; 3]) -> Option<Self::Node>;
+    /// The data of `node`, whose children are the cells of `level` (≥ 1).
+    fn fetch(&self, node: Self::Node, level: usize) -> Self::Desc;
+    /// Whether the cell of `level` in slot `slot` of the node of `desc` is occupied (a set voxel
+    /// at the last level).
+    fn occupied(&self, desc: &Self::Desc, level: usize, slot: u32) -> bool;
+    /// The node of the occupied cell of `level` (not the voxels') in slot `slot`.
+    fn child(&self, node: Self::Node, desc: &Self::Desc, level: usize, slot: u32) -> Self::Node;
+    /// The largest `j ≤ max` such that the aligned block of `2^j` cells per axis around the (empty)
+    /// cell in slot `slot` is wholly empty — the `8^j` slots from `slot & !(8^j − 1)`, consecutive
+    /// in Morton order — for the DDA to step over it in one step; 0 where the layout does not
+    /// coalesce empty cells (the default).
+    #[inline(always)]
+    fn empty_block(&self, _desc: &Self::Desc, _level: usize, _slot: u32, _max: u32) -> u32 {
+        0
+    }
+}
+
+/// The first set voxel along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WideHit {
+    /// Where the ray enters the voxel (or the span's start, if it starts inside).
+    pub t: f32,
+    /// The voxel's integer coordinates, world-oriented.
+    pub voxel: [u32; 3],
+}
+
+/// Casts the octree-space ray `r` over `(t_min, t_max)` (clipped here to the grid's cube) through
+/// `nodes`, a wide tree of `levels`.
+#[inline(always)]
+pub fn cast<N: WideNodes, S: Stats>(
+    nodes: &N,
+    levels: &DdaLevels,
+    r: &OctreeRay,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<WideHit> {
+    let (t0, t1) = r.root_span(t_min, t_max);
+    if span_is_empty(t0, t1) {
+        return None;
+    }
+    let shifts = levels.shifts();
+    let grid_level = levels.level;
+    let last = shifts.len() - 1;
+    let frame = Frame::new(r, grid_level);
+    let flip: [i32; 3] = std::array::from_fn(|a| if r.mirror_mask >> a & 1 == 1 { (1 << grid_level) - 1 } else { 0 });
+
+    // Levels whose cells are not smaller than the grid have one cell, the whole grid: resolve
+    // them once. `node[k]` is the node holding level k's cells, `desc[k]` its data.
+    let mut node = [N::Node::default(); MAX_DDA_LEVELS];
+    let mut desc = [N::Desc::default(); MAX_DDA_LEVELS];
+    let k0 = shifts.iter().position(|&s| s < grid_level).unwrap_or(last);
+    if k0 > 0 {
+        stats.visit();
+        let mut n = nodes.top([0; 3])?;
+        for k in 1..k0 {
+            stats.visit();
+            let d = nodes.fetch(n, k);
+            if !nodes.occupied(&d, k, 0) {
+                return None;
+            }
+            n = nodes.child(n, &d, k, 0);
+        }
+        stats.visit();
+        node[k0] = n;
+        desc[k0] = nodes.fetch(n, k0);
+    }
+
+    // The current cell: its level `k` (with its side and its parent's, in voxels' log2), its
+    // lower corner `lo` in the mirrored frame, in voxels, the distances to its exit planes, and
+    // its slot in its parent, whose data is `cur`.
+    let mut k = k0;
+    let mut shift = shifts[k0];
+    let mut parent = grid_level;
+    let mut t = t0;
+    let (mut lo, mut exit) = frame.descend(t, [0; 3], frame.exits([0; 3]), parent, shift);
+    let mut slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+    let mut cur = desc[k];
+    let mut advances = 0u32;
+    loop {
+        stats.step();
+        let tc_max = Frame::nearest(exit);
+        let (occupied, top) = if k == 0 {
+            stats.visit();
+            let top = nodes.top([0, 1, 2].map(|a| ((lo[a] ^ flip[a]) >> shift) as u32));
+            (top.is_some(), top)
+        } else {
+            (nodes.occupied(&cur, k, slot.slot), None)
+        };
+        if occupied && t <= tc_max.min(t1) {
+            if k == last {
+                return Some(WideHit { t, voxel: [0, 1, 2].map(|a| (lo[a] ^ flip[a]) as u32) });
+            }
+            // PUSH: into the occupied cell, at the child the ray is in at t.
+            let child = match top {
+                Some(n) => n,
+                None => nodes.child(node[k], &cur, k, slot.slot),
+            };
+            stats.visit();
+            stats.push();
+            k += 1;
+            node[k] = child;
+            cur = nodes.fetch(child, k);
+            desc[k] = cur;
+            (parent, shift) = (shift, shifts[k]);
+            (lo, exit) = frame.descend(t, lo, exit, parent, shift);
+            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+            continue;
+        }
+
+        // ADVANCE: to the next cell of this level through the exit plane(s) — or past the empty
+        // block of `2^coalesce` cells per axis around it (the octree casters' advance at that
+        // block's scale), entering the next block at the cell the ray is in. `changed` gathers the
+        // coordinate bits the step changed.
+        stats.level_step(k);
+        let bits = parent - shift;
+        let coalesce = if k > 0 && bits >= 2 { nodes.empty_block(&cur, k, slot.slot, bits - 1) } else { 0 };
+        let side = shift + coalesce;
+        let (corner, t_exit) = match coalesce {
+            0 => (lo, tc_max),
+            _ => {
+                let corner = lo.map(|x| x & !((1 << side) - 1));
+                exit = frame.exits(corner);
+                (corner, Frame::nearest(exit))
+            }
+        };
+        let mut next = corner;
+        let mut changed = 0u32;
+        for a in 0..3 {
+            if exit[a] <= t_exit {
+                next[a] = corner[a] - (1 << side);
+                changed |= (lo[a] ^ next[a]) as u32;
+                exit[a] = frame.plane_t(a, next[a]);
+                if coalesce == 0 {
+                    slot.step(a);
+                }
+            }
+        }
+        t = t_exit;
+        advances += 1;
+        if t > t1 || advances >= crate::MAX_STEPS {
+            if advances >= crate::MAX_STEPS {
+                stats.at_bound();
+            }
+            return None;
+        }
+        // POP while the new cell lies outside its parent: the highest changed bit says how far
+        // up (a step below 0, out of the grid, changes them all).
+        if changed >> parent != 0 {
+            while k > k0 && changed >> shifts[k - 1] != 0 {
+                k -= 1;
+                stats.pop();
+            }
+            if k == k0 && changed >> grid_level != 0 {
+                return None;
+            }
+            shift = shifts[k];
+            parent = if k == k0 { grid_level } else { shifts[k - 1] };
+            lo = next.map(|x| x & !((1 << shift) - 1));
+            exit = frame.exits(lo);
+            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+            cur = desc[k];
+        } else if coalesce > 0 {
+            (lo, exit) = frame.descend(t, next, exit, side, shift);
+            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+        } else {
+            lo = next;
+        }
+    }
+}
+
+/// The current cell's slot in its parent (its local Morton code, [`local_slot`]), kept up to date
+/// as the DDA steps: a step moves one axis's world coordinate by one, which on that axis's bits of
+/// the code ("dilated" arithmetic) is an add or subtract with the other axes' bits masked out.
+#[derive(Clone, Copy)]
+struct Slot {
+    slot: u32,
+    /// Per axis, the code's bits of that axis.
+    axis: [u32; 3],
+    /// Per axis, whether a step increases the world coordinate (the mirrored axes).
+    up: [bool; 3],
+}
+
+impl Slot {
+    #[inline(always)]
+    fn new(lo: [i32; 3], flip: [i32; 3], shift: u32, parent: u32, mirror_mask: u32) -> Self {
+        let bits = parent - shift;
+        let m = (1 << bits) - 1;
+        let local = |a: usize| ((lo[a] ^ flip[a]) >> shift) as u32 & m;
+        let ones = spread10(m);
+        Self {
+            slot: local_slot([local(0), local(1), local(2)], bits),
+            axis: [ones, ones << 1, ones << 2],
+            up: [mirror_mask & 1 != 0, mirror_mask & 2 != 0, mirror_mask & 4 != 0],
+        }
+    }
+
+    /// One step along axis `a` (wrapping if the step leaves the parent, where the DDA pops).
+    #[inline(always)]
+    fn step(&mut self, a: usize) {
+        let m = self.axis[a];
+        let moved = match self.up[a] {
+            true => (self.slot | !m).wrapping_add(1 << a) & m,
+            false => (self.slot & m).wrapping_sub(1 << a) & m,
+        };
+        self.slot = self.slot & !m | moved;
+    }
+}
+
+/// The ray's fixed quantities for plane coordinates.
+struct Frame {
+    coef: [f32; 3],
+    bias: [f32; 3],
+    /// `1 / coef`: the mirrored coordinate at `t` is `(t + bias) · inv`.
+    inv: [f32; 3],
+    /// A voxel's side in octree space, `2^-L`, and the grid's voxels per axis.
+    h: f32,
+    res: f32,
+}
+
+impl Frame {
+    #[inline(always)]
+    fn new(r: &OctreeRay, grid_level: u32) -> Self {
+        let (coef, bias) = (r.coef.to_array(), r.bias.to_array());
+        let res = (1u64 << grid_level) as f32;
+        Self { coef, bias, inv: coef.map(|c| 1.0 / c), h: 1.0 / res, res }
+    }
+
+    /// The distance to the plane of axis `a` at integer voxel coordinate `e` of the mirrored
+    /// frame: [`OctreeRay::plane_t`] of the exact coordinate `1 + e·2^-L`.
+    #[inline(always)]
+    fn plane_t(&self, a: usize, e: i32) -> f32 {
+        (1.0 + e as f32 * self.h) * self.coef[a] - self.bias[a]
+    }
+
+    /// The distances to the exit planes of the cell whose lower corner is `lo`.
+    #[inline(always)]
+    fn exits(&self, lo: [i32; 3]) -> [f32; 3] {
+        [self.plane_t(0, lo[0]), self.plane_t(1, lo[1]), self.plane_t(2, lo[2])]
+    }
+
+    /// The nearest of three exit planes (finite distances: no NaN to order).
+    #[inline(always)]
+    fn nearest(exit: [f32; 3]) -> f32 {
+        let m = if exit[1] < exit[0] { exit[1] } else { exit[0] };
+        if exit[2] < m { exit[2] } else { m }
+    }
+
+    /// The child cell (side `2^child`) the ray is in at `t`, inside the cell at `parent_lo` (side
+    /// `2^parent`) whose exit planes are at `parent_exit`: its lower corner and its exit planes.
+    /// Per axis, the child is the number of the parent's inner planes the ray has not crossed at
+    /// `t` (`plane_t > t`): found by halving, the octree casters' choice level by level, for a
+    /// few children per axis, and for many by a guess from the ray's position corrected by the
+    /// planes themselves — either way the planes' answer alone.
+    #[inline(always)]
+    fn descend(
+        &self,
+        t: f32,
+        parent_lo: [i32; 3],
+        parent_exit: [f32; 3],
+        parent: u32,
+        child: u32,
+    ) -> ([i32; 3], [f32; 3]) {
+        let bits = parent - child;
+        let mut lo = parent_lo;
+        let mut exit = parent_exit;
+        for a in 0..3 {
+            let plane = |q: i32| self.plane_t(a, parent_lo[a] + (q << child));
+            let mut q = 0;
+            if bits <= 2 {
+                // Count the inner planes not yet crossed, without a branch (at most three).
+                let mut planes = [parent_exit[a]; 4];
+                for p in 1..1 << bits {
+                    planes[p as usize] = plane(p);
+                    q += i32::from(planes[p as usize] > t);
+                }
+                exit[a] = planes[q as usize];
+            } else if bits == 3 {
+                for b in (0..bits).rev() {
+                    let t_mid = plane(q + (1 << b));
+                    if t_mid > t {
+                        q += 1 << b;
+                        exit[a] = t_mid;
+                    }
+                }
+            } else {
+                let last = (1i32 << bits) - 1;
+                // The ray's mirrored coordinate at t, in voxels; `as` saturates (NaN to 0).
+                let v = (((t + self.bias[a]) * self.inv[a] - 1.0) * self.res) as i32;
+                q = (v.saturating_sub(parent_lo[a]) >> child).clamp(0, last);
+                while q < last && plane(q + 1) > t {
+                    q += 1;
+                }
+                while q > 0 && plane(q) <= t {
+                    q -= 1;
+                }
+                if q > 0 {
+                    exit[a] = plane(q);
+                }
+            }
+            lo[a] = parent_lo[a] + (q << child);
+        }
+        (lo, exit)
+    }
+}
+
+/// A ray through a wide tree, as every hierarchical grid's kernel casts it: into octree space,
+/// clipped to the box the leaves occupy (exact: no voxel lies outside it, and a voxel's entry
+/// is never before the box's), cast, and the hit reported as the voxel's Morton code with the
+/// normal of the face it was entered through — as `svdag` reports its hits.
+#[allow(clippy::too_many_arguments)] // the tree, its shape and place, the ray and its span
+#[inline(always)]
+pub fn trace<N: WideNodes, S: Stats>(
+    nodes: &N,
+    levels: &DdaLevels,
+    grid: &VoxelGrid,
+    occupied: &[Vec3; 2],
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
+    // A NaN span is empty (the clip below would drop a NaN bound).
+    if span_is_empty(t_min, t_max) {
+        return None;
+    }
+    let oray = grid.to_octree_space(ray);
+    let r = OctreeRay::from_octree_space(&oray);
+    let (enter, exit) = r.box_span(occupied[0], occupied[1]);
+    let hit = cast(nodes, levels, &r, t_min.max(enter), t_max.min(exit), stats)?;
+    let side = 1.0 / grid.resolution() as f32;
+    let cube_min = Vec3::ONE + Vec3::from(hit.voxel.map(|c| c as f32)) * side;
+    Some(Hit { t: hit.t, normal: face_normal(&oray, cube_min, side), prim: morton::encode(hit.voxel) })
+}

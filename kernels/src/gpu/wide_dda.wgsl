@@ -1,0 +1,250 @@
+// The hierarchical DDA (kernels/src/cpu/wide_dda.rs; Museth's HDDA) shared by the hierarchical
+// voxel grids' kernels (vdb.wgsl, tree64.wgsl, brickmap.wgsl), as octree_cast.wgsl is shared by the
+// octrees'. One DDA whose cell is the empty region the ray is in: it steps over an empty cell of
+// its level, descends into an occupied one at the child the ray is in, climbs back when a step
+// leaves the parent. It runs in octree_ray.wgsl's mirrored frame on integer voxel coordinates,
+// every plane through plane_t of the exact coordinate 1 + k·2^-L, as on the CPU.
+//
+// The node layout comes from functions the structure's own file defines:
+//
+//   fn wide_top(cell: vec3<u32>) -> u32                            (the top cell's node, or NO_NODE)
+//   fn wide_fetch(node: u32, k: u32) -> vec4<u32>                  (a node's data; its cells are level k's)
+//   fn wide_occupied(desc: vec4<u32>, k: u32, local: vec3<u32>) -> bool
+//   fn wide_child(node: u32, desc: vec4<u32>, k: u32, local: vec3<u32>) -> u32
+//   fn wide_empty_block(desc: vec4<u32>, k: u32, slot: u32, max: u32) -> u32   (0: no coalescing)
+//
+// Params (kernels/src/gpu/wide.rs): words 0–4 the voxel grid (octree_ray.wgsl), then WIDE_* below,
+// then the structure's own from WIDE_OWN.
+
+// Bit 0: non-empty.
+const WIDE_FLAGS: u32 = 5u;
+// The box the leaves occupy, octree space, f32 bits: lo xyz, then hi xyz.
+const WIDE_OCCUPIED: u32 = 6u;
+// Levels of cells, the voxels' included; then each level's side, log2 voxels (top cells first).
+const WIDE_LEVELS: u32 = 12u;
+const WIDE_SHIFTS: u32 = 13u;
+const MAX_DDA_LEVELS: u32 = 12u;
+const WIDE_OWN: u32 = 25u;
+const NO_NODE: u32 = 0xffffffffu;
+
+fn wide_shift(k: u32) -> u32 {
+    return params(WIDE_SHIFTS + k);
+}
+
+// Spreads the low 10 bits of x so bit i lands on bit 3i (structures::voxel::wide::spread10).
+fn spread10(v: u32) -> u32 {
+    var x = v & 0x3ffu;
+    x = (x | (x << 16u)) & 0x030000ffu;
+    x = (x | (x << 8u)) & 0x0300f00fu;
+    x = (x | (x << 4u)) & 0x030c30c3u;
+    return (x | (x << 2u)) & 0x09249249u;
+}
+
+// The local Morton code of cell coordinates below 2^10 (wide::local_slot).
+fn wide_slot(local: vec3<u32>) -> u32 {
+    return spread10(local.x) | (spread10(local.y) << 1u) | (spread10(local.z) << 2u);
+}
+
+// The Morton code of coordinates below 2^20, as (low, high) words.
+fn morton64(c: vec3<u32>) -> vec2<u32> {
+    let low = wide_slot(c & vec3<u32>(0x3ffu));
+    let high = wide_slot(c >> vec3<u32>(10u));
+    return vec2<u32>(low | (high << 30u), high >> 2u);
+}
+
+struct WideHit {
+    hit: bool,
+    t: f32,
+    voxel: vec3<u32>,
+}
+
+// The lower corner of the child cell (side 2^child) the ray is in at t, inside the cell at
+// parent_lo (side 2^parent): per axis, the parent's inner planes the ray has not crossed at t — a
+// guess from the ray's position, corrected by the planes themselves (cpu::wide_dda's descend).
+fn wide_descend(r: OctreeRay, inv: vec3<f32>, t: f32, parent_lo: vec3<i32>, parent: u32, child: u32) -> vec3<i32> {
+    let h = 1.0 / f32(1u << params(4u));
+    let res = f32(1u << params(4u));
+    let cells = 1 << (parent - child);
+    let w = 1 << child;
+    var out: vec3<i32>;
+    for (var a = 0u; a < 3u; a++) {
+        let coef = r.coef[a];
+        let bias = r.bias[a];
+        let x = (t + bias) * inv[a];
+        var g = ((x - 1.0) * res - f32(parent_lo[a])) / f32(w);
+        g = select(0.0, g, g == g);
+        var q = i32(clamp(g, 0.0, f32(cells - 1)));
+        loop {
+            if (q + 1 < cells && (1.0 + f32(parent_lo[a] + (q + 1) * w) * h) * coef - bias > t) {
+                q += 1;
+            } else {
+                break;
+            }
+        }
+        loop {
+            if (q > 0 && (1.0 + f32(parent_lo[a] + q * w) * h) * coef - bias <= t) {
+                q -= 1;
+            } else {
+                break;
+            }
+        }
+        out[a] = parent_lo[a] + q * w;
+    }
+    return out;
+}
+
+// Casts r over (t_min, t_max), clipped here to the grid's cube.
+fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
+    var miss: WideHit;
+    miss.hit = false;
+    let span = root_span(r, t_min_in, t_max_in);
+    let t1 = span.y;
+    if (!(span.x <= t1)) {
+        return miss;
+    }
+    let grid_level = params(4u);
+    let levels = params(WIDE_LEVELS);
+    let last = levels - 1u;
+    let h = 1.0 / f32(1u << grid_level);
+    var flip = vec3<i32>(0);
+    for (var a = 0u; a < 3u; a++) {
+        if (((r.mirror >> a) & 1u) == 1u) {
+            flip[a] = (1 << grid_level) - 1;
+        }
+    }
+    let inv = vec3<f32>(1.0) / r.coef;
+    var node: array<u32, MAX_DDA_LEVELS>;
+    var desc: array<vec4<u32>, MAX_DDA_LEVELS>;
+
+    // Levels whose cells are not smaller than the grid have one cell, the whole grid.
+    var k0 = last;
+    for (var k = 0u; k < levels; k++) {
+        if (wide_shift(k) < grid_level) {
+            k0 = k;
+            break;
+        }
+    }
+    if (k0 > 0u) {
+        var n = wide_top(vec3<u32>(0u));
+        if (n == NO_NODE) {
+            return miss;
+        }
+        for (var k = 1u; k < k0; k++) {
+            let d = wide_fetch(n, k);
+            if (!wide_occupied(d, k, vec3<u32>(0u))) {
+                return miss;
+            }
+            n = wide_child(n, d, k, vec3<u32>(0u));
+        }
+        node[k0] = n;
+        desc[k0] = wide_fetch(n, k0);
+    }
+
+    var k = k0;
+    var t = span.x;
+    var lo = wide_descend(r, inv, t, vec3<i32>(0), grid_level, wide_shift(k0));
+    var advances = 0u;
+    loop {
+        count_step();
+        let shift = wide_shift(k);
+        let exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
+        let tc_max = min(min(exit.x, exit.y), exit.z);
+        let cell = vec3<u32>((lo ^ flip) >> vec3<u32>(shift));
+        var occupied = false;
+        var top = NO_NODE;
+        var local = vec3<u32>(0u);
+        if (k == 0u) {
+            top = wide_top(cell);
+            occupied = top != NO_NODE;
+        } else {
+            local = cell & vec3<u32>((1u << (wide_shift(k - 1u) - shift)) - 1u);
+            occupied = wide_occupied(desc[k], k, local);
+        }
+        if (occupied && t <= min(tc_max, t1)) {
+            if (k == last) {
+                return WideHit(true, t, vec3<u32>(lo ^ flip));
+            }
+            // PUSH: into the occupied cell, at the child the ray is in at t.
+            var child = top;
+            if (k != 0u) {
+                child = wide_child(node[k], desc[k], k, local);
+            }
+            node[k + 1u] = child;
+            desc[k + 1u] = wide_fetch(child, k + 1u);
+            lo = wide_descend(r, inv, t, lo, shift, wide_shift(k + 1u));
+            k += 1u;
+            continue;
+        }
+
+        // ADVANCE through the exit plane(s) — or past the empty block of 2^coalesce cells per axis
+        // around the cell (cpu::wide_dda), entering the next block at the cell the ray is in.
+        var coalesce = 0u;
+        let bits = select(0u, wide_shift(k - 1u) - shift, k > 0u);
+        if (k > 0u && bits >= 2u) {
+            coalesce = wide_empty_block(desc[k], k, wide_slot(local), bits - 1u);
+        }
+        let side = shift + coalesce;
+        let corner = lo & vec3<i32>(~((1 << side) - 1));
+        let bexit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(corner) * h);
+        let t_exit = min(min(bexit.x, bexit.y), bexit.z);
+        var next = corner;
+        for (var a = 0u; a < 3u; a++) {
+            if (bexit[a] <= t_exit) {
+                next[a] -= 1 << side;
+            }
+        }
+        t = t_exit;
+        advances += 1u;
+        if (t > t1 || advances >= MAX_STEPS) {
+            if (advances >= MAX_STEPS) {
+                count_bound();
+            }
+            return miss;
+        }
+        // POP while the new cell lies outside its parent (a step out of the grid changes every bit).
+        let changed = bitcast<u32>(lo.x ^ next.x) | bitcast<u32>(lo.y ^ next.y) | bitcast<u32>(lo.z ^ next.z);
+        var parent = grid_level;
+        if (k > k0) {
+            parent = wide_shift(k - 1u);
+        }
+        if ((changed >> parent) != 0u) {
+            loop {
+                if (k > k0 && (changed >> wide_shift(k - 1u)) != 0u) {
+                    k -= 1u;
+                } else {
+                    break;
+                }
+            }
+            if (k == k0 && (changed >> grid_level) != 0u) {
+                return miss;
+            }
+            lo = next & vec3<i32>(~((1 << wide_shift(k)) - 1));
+        } else if (coalesce > 0u) {
+            lo = wide_descend(r, inv, t, next, side, shift);
+        } else {
+            lo = next;
+        }
+    }
+    return miss;
+}
+
+fn wide_corner(first: u32) -> vec3<f32> {
+    return vec3<f32>(bitcast<f32>(params(first)), bitcast<f32>(params(first + 1u)), bitcast<f32>(params(first + 2u)));
+}
+
+// The structure's trace (cpu::wide_dda::trace): clipped to the occupied box, the hit reported as
+// the voxel's t and Morton code.
+fn trace(ray: Ray, index: u32) -> TraceResult {
+    if ((params(WIDE_FLAGS) & 1u) == 0u || !(ray.t_min <= ray.t_max)) {
+        return no_hit();
+    }
+    let o = to_octree_space(ray);
+    let r = octree_ray(o.o, o.d);
+    let span = box_span(r, wide_corner(WIDE_OCCUPIED), wide_corner(WIDE_OCCUPIED + 3u));
+    let h = wide_cast(r, max(ray.t_min, span.x), min(ray.t_max, span.y));
+    if (!h.hit) {
+        return no_hit();
+    }
+    let code = morton64(h.voxel);
+    return TraceResult(true, h.t, code.x, code.y);
+}

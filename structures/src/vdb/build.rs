@@ -1,0 +1,247 @@
+//! VDB builds: the voxeliser's stream (bounded memory: one open node per level, the finished
+//! levels, a window of the voxeliser's chunks) or the canonical octree, through the shared
+//! wide-tree builds ([`crate::voxel::wide`]), which meet every level's nodes in the same order,
+//! so both give the same words. Each node is written to its level's array as it closes, its
+//! children named by their index in the level below; [`lay_out`] then concatenates the root table
+//! and the interior levels and turns every child index into a word offset.
+
+use std::time::Instant;
+
+use scenes::Scene;
+
+use super::layout::{LevelOffsets, Sizes, Tables, mask_words, rank_words};
+use super::{Vdb, VdbParams, VdbStats};
+use crate::BuildError;
+use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, WideStream, feed_from_octree};
+use crate::voxel::{self, Octree, VoxelGrid, VoxelizeStats, morton};
+
+pub fn build(scene: &Scene, params: VdbParams) -> Result<Vdb, BuildError> {
+    let start = Instant::now();
+    let grid = VoxelGrid::fit(scene.bounds(), params.level);
+    let shape = params.shape();
+    let mut sink = Levels::new(&params, &shape);
+    let mut stream = WideStream::new(&shape);
+    let voxelize = voxel::voxelize(scene, &grid, |chunk| {
+        for &code in &chunk.codes {
+            stream.push(&mut sink, code);
+        }
+        Ok::<(), std::convert::Infallible>(())
+    });
+    let voxelize = match voxelize {
+        Ok(v) => v,
+        Err(never) => match never {},
+    };
+    let counts = stream.finish(&mut sink);
+    finish(grid, params, sink, counts, voxelize, start)
+}
+
+/// The same tree from the canonical octree's levels (the tests' second path to the same words).
+pub fn from_octree(tree: &Octree, params: VdbParams) -> Result<Vdb, BuildError> {
+    let start = Instant::now();
+    let shape = params.shape();
+    let mut sink = Levels::new(&params, &shape);
+    let counts = feed_from_octree(tree, &shape, &mut sink);
+    finish(tree.grid, params, sink, counts, VoxelizeStats::default(), start)
+}
+
+/// The build's sink: every interior level's nodes and the leaves, each in its own array as
+/// written; a cube's handle is its index in its level.
+struct Levels {
+    shape: WideShape,
+    sizes: Sizes,
+    bits: Vec<u32>,
+    /// `nodes[l]`: level `l`'s nodes, children named by index.
+    nodes: Vec<Vec<u32>>,
+    counts: Vec<u64>,
+    leaves: Vec<u32>,
+    leaf_count: u64,
+    tiles: Vec<(u64, u32)>,
+}
+
+impl Levels {
+    fn new(params: &VdbParams, shape: &WideShape) -> Self {
+        let interior = shape.levels() - 1;
+        Self {
+            shape: shape.clone(),
+            sizes: params.sizes(),
+            bits: params.log2.clone(),
+            nodes: vec![Vec::new(); interior],
+            counts: vec![0; interior],
+            leaves: Vec::new(),
+            leaf_count: 0,
+            tiles: Vec::new(),
+        }
+    }
+
+    /// The first voxel of the cube `code` of a level with cubes `2^shift` wide.
+    fn origin(&self, code: u64, shift: u32) -> [u32; 3] {
+        let c = if shift >= self.shape.level { [0; 3] } else { morton::decode(code) };
+        c.map(|x| x << shift)
+    }
+}
+
+impl WideSink for Levels {
+    type Handle = u32;
+
+    fn leaf(&mut self, code: u64, voxels: &[u64]) -> u32 {
+        let bits = self.bits[self.bits.len() - 1];
+        let words = self.sizes.leaf_words(bits);
+        let origin = self.origin(code, self.shape.leaf_shift());
+        let at = self.leaves.len();
+        self.leaves.resize(at + words, 0);
+        let out = &mut self.leaves[at..];
+        if self.sizes.tables == Tables::Dense {
+            out[..3].copy_from_slice(&origin);
+        }
+        let mask = &mut out[self.sizes.leaf_mask()..self.sizes.leaf_mask() + mask_words(bits)];
+        for (i, w) in mask.iter_mut().enumerate() {
+            *w = (voxels[i / 2] >> (32 * (i % 2))) as u32;
+        }
+        self.leaf_count += 1;
+        (self.leaf_count - 1) as u32
+    }
+
+    fn node(&mut self, level: usize, code: u64, children: &[(u32, u32)]) -> u32 {
+        let bits = self.bits[level];
+        let sizes = self.sizes;
+        let origin = self.origin(code, self.shape.shifts[level]);
+        let out = &mut self.nodes[level];
+        let at = out.len();
+        out.resize(at + sizes.node_words(bits), 0);
+        let node = &mut out[at..];
+        let mask = sizes.child_mask(bits);
+        for &(slot, _) in children {
+            node[mask + (slot >> 5) as usize] |= 1 << (slot & 31);
+        }
+        let table = sizes.table(bits);
+        match sizes.tables {
+            Tables::Dense => {
+                node[..3].copy_from_slice(&origin);
+                node[3] = level as u32;
+                for &(slot, child) in children {
+                    node[table + 2 * slot as usize] = child;
+                }
+            }
+            Tables::Compact => {
+                // Children arrive in slot order, one after another in the level below.
+                debug_assert!(children.windows(2).all(|w| w[1].1 == w[0].1 + 1));
+                node[0] = children[0].1;
+                let (m, mut rank) = (mask_words(bits), 0);
+                for g in 0..rank_words(bits) {
+                    node[table + g] = rank;
+                    rank += node[mask + 2 * g].count_ones();
+                    if 2 * g + 1 < m {
+                        rank += node[mask + 2 * g + 1].count_ones();
+                    }
+                }
+            }
+        }
+        self.counts[level] += 1;
+        (self.counts[level] - 1) as u32
+    }
+
+    fn top(&mut self, code: u64, handle: u32) {
+        self.tiles.push((code, handle));
+    }
+}
+
+fn finish(
+    grid: VoxelGrid,
+    params: VdbParams,
+    levels: Levels,
+    counts: StreamCounts,
+    voxelize: VoxelizeStats,
+    start: Instant,
+) -> Result<Vdb, BuildError> {
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut nodes_per_level = levels.counts.clone();
+    nodes_per_level.push(levels.leaf_count);
+    let stats = VdbStats {
+        tiles: levels.tiles.len() as u64,
+        nodes_per_level,
+        voxels_per_leaf: counts.voxels as f64 / levels.leaf_count.max(1) as f64,
+        build_ms,
+        layout_ms: 0.0,
+    };
+    let t = Instant::now();
+    let shape = levels.shape.clone();
+    let Laid { words, leaves, level_starts } = lay_out(levels)?;
+    let stats = VdbStats { layout_ms: t.elapsed().as_secs_f64() * 1e3, ..stats };
+    let occupied = counts.bounds.octree_box(grid.level.saturating_sub(shape.leaf_shift()));
+    let (levels, offsets) = (shape.dda_levels(), LevelOffsets::new(params.sizes(), &params.log2));
+    Ok(Vdb {
+        grid,
+        params,
+        words,
+        leaves,
+        level_starts,
+        occupied,
+        levels,
+        offsets,
+        voxels: counts.voxels,
+        stats,
+        voxelize,
+    })
+}
+
+/// The root table, then the interior levels, with every child index turned into a word offset.
+fn lay_out(mut levels: Levels) -> Result<Laid, BuildError> {
+    let sizes = levels.sizes;
+    let interior = levels.nodes.len();
+    let root = sizes.root_words(levels.tiles.len());
+    let total = root as u64 + levels.nodes.iter().map(|l| l.len() as u64).sum::<u64>();
+    if total > u32::MAX as u64 || levels.leaves.len() as u64 > u32::MAX as u64 {
+        return Err(BuildError::Limit {
+            structure: "vdb",
+            detail: format!("{total} words of nodes or {} of leaves do not fit 32-bit offsets", levels.leaves.len()),
+        });
+    }
+    let mut starts = vec![root as u32];
+    for l in &levels.nodes {
+        starts.push(starts[starts.len() - 1] + l.len() as u32);
+    }
+    let leaf_words = sizes.leaf_words(levels.bits[levels.bits.len() - 1]) as u32;
+    // Where child `index` of a level-`l` node lies (level l + 1 interior, or a leaf).
+    let child_word = |l: usize, index: u32| -> u32 {
+        match l + 1 < interior {
+            true => starts[l + 1] + index * sizes.node_words(levels.bits[l + 1]) as u32,
+            false => index * leaf_words,
+        }
+    };
+    let mut words = Vec::with_capacity(total as usize);
+    words.resize(root, 0);
+    words[0] = levels.tiles.len() as u32;
+    for (i, &(key, child)) in levels.tiles.iter().enumerate() {
+        let at = sizes.tile(i);
+        words[at] = key as u32;
+        words[at + 1] = (key >> 32) as u32;
+        words[at + 2] = match interior {
+            0 => child * leaf_words,
+            _ => starts[0] + child * sizes.node_words(levels.bits[0]) as u32,
+        };
+    }
+    for l in 0..interior {
+        let bits = levels.bits[l];
+        let size = sizes.node_words(bits);
+        let (mask, table) = (sizes.child_mask(bits), sizes.table(bits));
+        let mut level = std::mem::take(&mut levels.nodes[l]);
+        for node in level.chunks_exact_mut(size) {
+            match sizes.tables {
+                Tables::Compact => node[0] = child_word(l, node[0]),
+                Tables::Dense => {
+                    for w in 0..mask_words(bits) {
+                        let mut m = node[mask + w];
+                        while m != 0 {
+                            let slot = 32 * w + m.trailing_zeros() as usize;
+                            node[table + 2 * slot] = child_word(l, node[table + 2 * slot]);
+                            m &= m - 1;
+                        }
+                    }
+                }
+            }
+        }
+        words.extend_from_slice(&level);
+    }
+    debug_assert_eq!(words.len() as u64, total);
+    Ok(Laid { words, leaves: std::mem::take(&mut levels.leaves), level_starts: starts })
+}
