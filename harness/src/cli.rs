@@ -111,6 +111,14 @@ pub enum Preset {
     /// pre-pass's included) and render time, and bytes per voxel beside the paper's budget. Each
     /// build is timed once. About 4 minutes on 2 cores.
     EsvoBeam,
+    /// Grid or octree on the same voxels (seed 003, issue 28): the hierarchical grids — vdb (dense
+    /// and compact tables, NanoVDB's HDDA, and compact with empty blocks coalesced), tree64 (tree
+    /// and DAG), brickmap — beside svo, esvo (contours off, and on) and svdag, and bvh on the
+    /// triangles, on bunny, dragon, city, menger, mandelbulb and room at 1024³…8192³ (as far as
+    /// memory allows) at 1024×1024: Mrays/s and × esvo, steps and node visits per ray and where
+    /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,
+    /// renders three times.
+    VoxelGrids,
     /// Every reproduction of DESIGN.md §9 in one run and one report, which opens with "Paper
     /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,
     /// org-table1, svdag-tables, svdag-shadow, svdag-temporal and esvo-beam, one after the other,
@@ -381,6 +389,9 @@ pub struct PartPlan {
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
 
+/// The voxel-grids preset's levels: 1024³ … 8192³.
+const VOXEL_GRID_LEVELS: std::ops::RangeInclusive<u32> = 10..=13;
+
 /// The fastest ORG configuration found on the dragon (issue 16), the `fast` variant of the
 /// org-fast preset: a coarse top grid (λ = 1/8 of the paper's) whose occupied cells get sub-grids
 /// twice as dense (leaf λ = 2), triangles listed by the exact separating-axis test. The rest is
@@ -402,6 +413,7 @@ impl Preset {
             Preset::SvdagTemporal => "svdag-temporal",
             Preset::SvdagShadow => "svdag-shadow",
             Preset::EsvoBeam => "esvo-beam",
+            Preset::VoxelGrids => "voxel-grids",
             Preset::Paper => "paper",
         }
     }
@@ -445,6 +457,24 @@ impl Preset {
             (Preset::EsvoBeam, "esvo") => {
                 vec![at(11, &["esvo.beam=off"], None), at(11, &["esvo.beam=on"], Some("beam"))]
             }
+            // Every hierarchical grid's variants at 1024³…8192³, the octrees beside them (ESVO
+            // with contours off, the targets' reference, and on).
+            (Preset::VoxelGrids, "vdb") => VOXEL_GRID_LEVELS
+                .flat_map(|l| {
+                    [
+                        at(l, &["vdb.tables=dense"], Some("dense")),
+                        at(l, &["vdb.tables=compact"], Some("compact")),
+                        at(l, &["vdb.tables=compact", "vdb.skip=block"], Some("compact-block")),
+                    ]
+                })
+                .collect(),
+            (Preset::VoxelGrids, "tree64") => VOXEL_GRID_LEVELS
+                .flat_map(|l| [at(l, &["tree64.dag=off"], None), at(l, &["tree64.dag=on"], Some("dag"))])
+                .collect(),
+            (Preset::VoxelGrids, "esvo") => VOXEL_GRID_LEVELS
+                .flat_map(|l| [at(l, &["esvo.contours=off"], None), at(l, &["esvo.contours=on"], Some("contours"))])
+                .collect(),
+            (Preset::VoxelGrids, "brickmap" | "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))
@@ -466,6 +496,7 @@ impl Preset {
                 kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree" && s != "svdag-temporal").collect()
             }
             Preset::EsvoBeam => vec!["bvh", "esvo"],
+            Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "svo", "esvo", "svdag"],
             // Its parts name their own.
             Preset::Paper => Vec::new(),
             Preset::OrgFig1 => vec!["ug", "org"],
@@ -495,7 +526,7 @@ impl Preset {
             // 1024³, the resolution of seed 001's Table 5 scenes' comparisons (issue 13).
             Preset::SvdagTemporal => &["voxel.levels=10"],
             Preset::SvdagShadow => &[],
-            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::Paper => &[],
+            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids | Preset::Paper => &[],
         }
     }
 
@@ -516,6 +547,7 @@ impl Preset {
             Preset::SvdagTemporal => scenes::ANIMATED_SCENES.to_vec(),
             Preset::SvdagShadow => vec!["room", "city", "terrain"],
             Preset::EsvoBeam => vec!["bunny", "dragon", "city", "terrain", "room"],
+            Preset::VoxelGrids => vec!["bunny", "dragon", "city", "menger", "mandelbulb", "room"],
             Preset::Paper => Vec::new(),
         };
         list.into_iter().map(String::from).collect()
@@ -538,7 +570,7 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
-            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam => (1024, 1024),
+            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids => (1024, 1024),
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
             Preset::SvdagShadow => (512, 512),
@@ -582,6 +614,11 @@ impl Preset {
         }
     }
 
+    /// Repetitions (warm-up, timed) of a render where they differ from the default 1 + 5.
+    fn render_reps(self) -> Option<(u32, u32)> {
+        (self == Preset::VoxelGrids).then_some((1, 3))
+    }
+
     /// Repetitions (warm-up, timed) of a whole animation's render where they differ from the
     /// renders': scaled down for the paper preset, 24 frames a repetition.
     fn animation_reps(self, scaled: bool) -> Option<(u32, u32)> {
@@ -594,7 +631,7 @@ impl Preset {
         match self {
             // 16 s a build of the kitchen's 24 frames in `all` mode.
             Preset::SvdagTemporal if scaled => Some((0, 3)),
-            Preset::EsvoScale | Preset::EsvoBeam => Some((0, 1)),
+            Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids => Some((0, 1)),
             // 16384² light maps: about a minute per build with six faces.
             Preset::SvdagShadow => Some((0, 3)),
             _ => None,
@@ -695,8 +732,8 @@ impl RunArgs {
                 .threads
                 .or(preset.threads())
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
-            warmup: self.warmup.unwrap_or(1),
-            reps: self.reps.unwrap_or(5),
+            warmup: self.warmup.or(preset.render_reps().map(|r| r.0)).unwrap_or(1),
+            reps: self.reps.or(preset.render_reps().map(|r| r.1)).unwrap_or(5),
             build_warmup: self.warmup.or(preset.build_reps(scaled).map(|b| b.0)).unwrap_or(1),
             build_reps: self.reps.or(preset.build_reps(scaled).map(|b| b.1)).unwrap_or(5),
             animation_reps: (

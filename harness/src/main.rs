@@ -125,6 +125,10 @@ fn list(what: ListWhat) {
         println!(
             "  esvo-beam  seed 000 §5.6, §6.2: esvo with and without the beam at 2048³ on five scenes, beside bvh, at 1024×1024"
         );
+        println!(
+            "  voxel-grids grid or octree on the same voxels: vdb (dense, compact, compact-block), tree64 (tree, dag), brickmap \
+             beside svo, esvo (contours off, on), svdag and bvh on six scenes at 1024³…8192³, 1024×1024"
+        );
         let (scaled, full) = cli::PAPER_MINUTES;
         println!(
             "  paper      every paper reproduction in one run and report, opening with the claims at a glance (about {scaled} min on 2 cores; --full: about {full} min):"

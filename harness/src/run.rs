@@ -779,6 +779,7 @@ fn timed_renders(
         steps_per_ray_mean: totals.steps as f64 / rays,
         steps_p99: None,
         node_visits_per_ray_mean: totals.node_visits as f64 / rays,
+        steps_per_level: steps_per_level(&totals, rays),
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),
         rays_at_bound: totals.rays_at_bound,
@@ -790,6 +791,12 @@ fn timed_renders(
         uncounted: uncounted(accel.counted()),
     };
     (stats, frame, heat)
+}
+
+/// Empty steps per ray by level, up to the deepest level stepped (empty where no level was).
+fn steps_per_level(totals: &kernels::Counters, rays: f64) -> Vec<f64> {
+    let used = totals.steps_by_level.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+    totals.steps_by_level[..used].iter().map(|&n| n as f64 / rays).collect()
 }
 
 /// The names of the counts a kernel does not expose (see `RenderStats::uncounted`).

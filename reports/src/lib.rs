@@ -18,5 +18,6 @@ pub mod schema;
 pub mod svdag_shadow;
 pub mod svdag_tables;
 pub mod svdag_temporal;
+pub mod voxel_grids;
 
 pub use schema::*;

@@ -31,6 +31,8 @@ pub fn section(results: &Results) -> Sheet {
     out.append(crate::svdag_temporal::section(results));
     out.append(esvo_beam(results));
     out.append(esvo_budget(results));
+    // Grid or octree on the same voxels wherever a run has a hierarchical voxel grid.
+    out.append(crate::voxel_grids::section(results));
     out
 }
 

@@ -428,6 +428,12 @@ pub struct RenderStats {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub steps_p99: Option<f64>,
     pub node_visits_per_ray_mean: f64,
+    /// Steps over empty cells per ray, by level of a hierarchical grid (`vdb`, `tree64`,
+    /// `brickmap`: top cells first, voxels last; the levels' sides are in the case's
+    /// `params.<structure>.level_sides`): where the traversal skips space. Empty for every other
+    /// structure and on the GPU.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub steps_per_level: Vec<f64>,
     pub prim_tests_per_ray_mean: f64,
     pub hit_fraction: f64,
     /// Rays the kernel ended at its iteration bound (`kernels::MAX_STEPS`) in the counted pass;

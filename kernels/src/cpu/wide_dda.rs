@@ -115,7 +115,7 @@ pub fn cast<N: WideNodes, S: Stats>(
     let mut parent = grid_level;
     let mut t = t0;
     let (mut lo, mut exit) = frame.descend(t, [0; 3], frame.exits([0; 3]), parent, shift);
-    let mut slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+    let mut slot = Slot::new(lo, shift, parent, r.mirror_mask);
     let mut cur = desc[k];
     let mut advances = 0u32;
     loop {
@@ -126,7 +126,7 @@ pub fn cast<N: WideNodes, S: Stats>(
             let top = nodes.top([0, 1, 2].map(|a| ((lo[a] ^ flip[a]) >> shift) as u32));
             (top.is_some(), top)
         } else {
-            (nodes.occupied(&cur, k, slot.slot), None)
+            (nodes.occupied(&cur, k, slot.world()), None)
         };
         if occupied && t <= tc_max.min(t1) {
             if k == last {
@@ -135,7 +135,7 @@ pub fn cast<N: WideNodes, S: Stats>(
             // PUSH: into the occupied cell, at the child the ray is in at t.
             let child = match top {
                 Some(n) => n,
-                None => nodes.child(node[k], &cur, k, slot.slot),
+                None => nodes.child(node[k], &cur, k, slot.world()),
             };
             stats.visit();
             stats.push();
@@ -145,7 +145,7 @@ pub fn cast<N: WideNodes, S: Stats>(
             desc[k] = cur;
             (parent, shift) = (shift, shifts[k]);
             (lo, exit) = frame.descend(t, lo, exit, parent, shift);
-            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+            slot = Slot::new(lo, shift, parent, r.mirror_mask);
             continue;
         }
 
@@ -155,7 +155,7 @@ pub fn cast<N: WideNodes, S: Stats>(
         // coordinate bits the step changed.
         stats.level_step(k);
         let bits = parent - shift;
-        let coalesce = if k > 0 && bits >= 2 { nodes.empty_block(&cur, k, slot.slot, bits - 1) } else { 0 };
+        let coalesce = if k > 0 && bits >= 2 { nodes.empty_block(&cur, k, slot.world(), bits - 1) } else { 0 };
         let side = shift + coalesce;
         let (corner, t_exit) = match coalesce {
             0 => (lo, tc_max),
@@ -199,11 +199,11 @@ pub fn cast<N: WideNodes, S: Stats>(
             parent = if k == k0 { grid_level } else { shifts[k - 1] };
             lo = next.map(|x| x & !((1 << shift) - 1));
             exit = frame.exits(lo);
-            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+            slot = Slot::new(lo, shift, parent, r.mirror_mask);
             cur = desc[k];
         } else if coalesce > 0 {
             (lo, exit) = frame.descend(t, next, exit, side, shift);
-            slot = Slot::new(lo, flip, shift, parent, r.mirror_mask);
+            slot = Slot::new(lo, shift, parent, r.mirror_mask);
         } else {
             lo = next;
         }
@@ -211,40 +211,45 @@ pub fn cast<N: WideNodes, S: Stats>(
 }
 
 /// The current cell's slot in its parent (its local Morton code, [`local_slot`]), kept up to date
-/// as the DDA steps: a step moves one axis's world coordinate by one, which on that axis's bits of
-/// the code ("dilated" arithmetic) is an add or subtract with the other axes' bits masked out.
+/// as the DDA steps. It is kept in the mirrored frame, where every step lowers one axis's
+/// coordinate by one — on that axis's bits of the code ("dilated" arithmetic), a subtract with the
+/// other axes' bits masked out — and turned into the stored (world) slot by flipping the mirrored
+/// axes' bits: a mirrored local coordinate is the world one's complement within the parent.
 #[derive(Clone, Copy)]
 struct Slot {
-    slot: u32,
+    /// The mirrored-frame slot.
+    mirrored: u32,
     /// Per axis, the code's bits of that axis.
     axis: [u32; 3],
-    /// Per axis, whether a step increases the world coordinate (the mirrored axes).
-    up: [bool; 3],
+    /// The bits of the mirrored axes: `mirrored ^ flip` is the world slot.
+    flip: u32,
 }
 
 impl Slot {
     #[inline(always)]
-    fn new(lo: [i32; 3], flip: [i32; 3], shift: u32, parent: u32, mirror_mask: u32) -> Self {
+    fn new(lo: [i32; 3], shift: u32, parent: u32, mirror_mask: u32) -> Self {
         let bits = parent - shift;
         let m = (1 << bits) - 1;
-        let local = |a: usize| ((lo[a] ^ flip[a]) >> shift) as u32 & m;
+        let local = |a: usize| (lo[a] >> shift) as u32 & m;
         let ones = spread10(m);
-        Self {
-            slot: local_slot([local(0), local(1), local(2)], bits),
-            axis: [ones, ones << 1, ones << 2],
-            up: [mirror_mask & 1 != 0, mirror_mask & 2 != 0, mirror_mask & 4 != 0],
-        }
+        let axis = [ones, ones << 1, ones << 2];
+        // The mirrored axes' bits: bit a of each triple for every mirrored axis a (the triples'
+        // bits lie three apart, so the product adds without carries).
+        let flip = ones * mirror_mask;
+        Self { mirrored: local_slot([local(0), local(1), local(2)], bits), axis, flip }
+    }
+
+    /// The stored slot.
+    #[inline(always)]
+    fn world(&self) -> u32 {
+        self.mirrored ^ self.flip
     }
 
     /// One step along axis `a` (wrapping if the step leaves the parent, where the DDA pops).
     #[inline(always)]
     fn step(&mut self, a: usize) {
         let m = self.axis[a];
-        let moved = match self.up[a] {
-            true => (self.slot | !m).wrapping_add(1 << a) & m,
-            false => (self.slot & m).wrapping_sub(1 << a) & m,
-        };
-        self.slot = self.slot & !m | moved;
+        self.mirrored = self.mirrored & !m | (self.mirrored & m).wrapping_sub(1 << a) & m;
     }
 }
 
