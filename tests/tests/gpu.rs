@@ -271,6 +271,21 @@ fn voxel_grid_variants() {
             let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
             let words = accel.memory().total_bytes() / 4;
             let chunk = (words as usize).div_ceil(5).max(64);
+            // The same DDA on both sides: the same steps per ray (within rounding on a real GPU).
+            let counted = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            let gpu_steps = render_primary(ctx, accel.as_ref(), &camera, &counted)
+                .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
+                .and_then(|r| r.steps_per_ray())
+                .expect("counted steps");
+            let (frame, counters) =
+                kernels::cpu::render::render_counted(accel.as_ref(), &camera, &shade, Workload::Primary);
+            let cpu_steps = counters.total().steps as f64 / frame.rays as f64;
+            eprintln!("gpu {name:<12} {label} steps per ray: {gpu_steps:.3} on the GPU, {cpu_steps:.3} on the CPU");
+            if (gpu_steps - cpu_steps).abs() > 1e-3 * cpu_steps {
+                failures.push(format!(
+                    "{name} {label}: {gpu_steps:.3} steps per ray on the GPU, {cpu_steps:.3} on the CPU"
+                ));
+            }
             for split_words in [None, Some(chunk)] {
                 let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words };
                 let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)

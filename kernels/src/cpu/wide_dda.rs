@@ -109,10 +109,13 @@ pub fn cast<N: WideNodes, S: Stats>(
 
     // The current cell: its level `k` (with its side and its parent's, in voxels' log2), its
     // lower corner `lo` in the mirrored frame, in voxels, the distances to its exit planes, and
-    // its slot in its parent, whose data is `cur`.
+    // its slot in its parent, whose data is `cur`. Over empty space the "cell" may be an aligned
+    // block of `2^block` cells per axis of level `k` (see ADVANCE); `lo` and `exit` are then the
+    // block's.
     let mut k = k0;
     let mut shift = shifts[k0];
     let mut parent = grid_level;
+    let mut block = 0u32;
     let mut t = t0;
     let (mut lo, mut exit) = frame.descend(t, [0; 3], frame.exits([0; 3]), parent, shift);
     let mut slot = Slot::new(lo, shift, parent, r.mirror_mask);
@@ -125,10 +128,19 @@ pub fn cast<N: WideNodes, S: Stats>(
             stats.visit();
             let top = nodes.top([0, 1, 2].map(|a| ((lo[a] ^ flip[a]) >> shift) as u32));
             (top.is_some(), top)
-        } else {
+        } else if block == 0 {
             (nodes.occupied(&cur, k, slot.world()), None)
+        } else {
+            (nodes.empty_block(&cur, k, slot.world(), block) < block, None)
         };
         if occupied && t <= tc_max.min(t1) {
+            if block > 0 {
+                // Into the block's cell the ray is in at t.
+                (lo, exit) = frame.descend(t, lo, exit, shift + block, shift);
+                slot = Slot::new(lo, shift, parent, r.mirror_mask);
+                block = 0;
+                continue;
+            }
             if k == last {
                 return Some(WideHit { t, voxel: [0, 1, 2].map(|a| (lo[a] ^ flip[a]) as u32) });
             }
@@ -149,32 +161,32 @@ pub fn cast<N: WideNodes, S: Stats>(
             continue;
         }
 
-        // ADVANCE: to the next cell of this level through the exit plane(s) — or past the empty
-        // block of `2^coalesce` cells per axis around it (the octree casters' advance at that
-        // block's scale), entering the next block at the cell the ray is in. `changed` gathers the
-        // coordinate bits the step changed.
+        // ADVANCE: to the next cell (or block) of this level through the exit plane(s). An empty
+        // cell inside a wholly empty aligned block of `2^j` cells is stepped over as that block
+        // (the octree casters' advance at that block's scale), and the DDA stays at that scale
+        // until a block holds something. `changed` gathers the coordinate bits the step changed.
         stats.level_step(k);
         let bits = parent - shift;
-        let coalesce = if k > 0 && bits >= 2 { nodes.empty_block(&cur, k, slot.world(), bits - 1) } else { 0 };
-        let side = shift + coalesce;
-        let (corner, t_exit) = match coalesce {
-            0 => (lo, tc_max),
-            _ => {
-                let corner = lo.map(|x| x & !((1 << side) - 1));
-                exit = frame.exits(corner);
-                (corner, Frame::nearest(exit))
-            }
+        let coalesce = match k > 0 && bits >= 2 {
+            true => block.max(nodes.empty_block(&cur, k, slot.world(), bits - 1)),
+            false => 0,
         };
-        let mut next = corner;
+        let mut t_exit = tc_max;
+        if coalesce > block {
+            block = coalesce;
+            lo = lo.map(|x| x & !((1 << (shift + block)) - 1));
+            exit = frame.exits(lo);
+            t_exit = Frame::nearest(exit);
+        }
+        let side = shift + block;
         let mut changed = 0u32;
         for a in 0..3 {
             if exit[a] <= t_exit {
-                next[a] = corner[a] - (1 << side);
-                changed |= (lo[a] ^ next[a]) as u32;
-                exit[a] = frame.plane_t(a, next[a]);
-                if coalesce == 0 {
-                    slot.step(a);
-                }
+                let stepped = lo[a] - (1 << side);
+                changed |= (lo[a] ^ stepped) as u32;
+                lo[a] = stepped;
+                exit[a] = frame.plane_t(a, stepped);
+                slot.step(a, block);
             }
         }
         t = t_exit;
@@ -197,15 +209,11 @@ pub fn cast<N: WideNodes, S: Stats>(
             }
             shift = shifts[k];
             parent = if k == k0 { grid_level } else { shifts[k - 1] };
-            lo = next.map(|x| x & !((1 << shift) - 1));
+            block = 0;
+            lo = lo.map(|x| x & !((1 << shift) - 1));
             exit = frame.exits(lo);
             slot = Slot::new(lo, shift, parent, r.mirror_mask);
             cur = desc[k];
-        } else if coalesce > 0 {
-            (lo, exit) = frame.descend(t, next, exit, side, shift);
-            slot = Slot::new(lo, shift, parent, r.mirror_mask);
-        } else {
-            lo = next;
         }
     }
 }
@@ -245,11 +253,12 @@ impl Slot {
         self.mirrored ^ self.flip
     }
 
-    /// One step along axis `a` (wrapping if the step leaves the parent, where the DDA pops).
+    /// One step along axis `a` of a block of `2^block` cells per axis: the block's bits of the
+    /// axis lie `3 · block` higher (wrapping if the step leaves the parent, where the DDA pops).
     #[inline(always)]
-    fn step(&mut self, a: usize) {
+    fn step(&mut self, a: usize, block: u32) {
         let m = self.axis[a];
-        self.mirrored = self.mirrored & !m | (self.mirrored & m).wrapping_sub(1 << a) & m;
+        self.mirrored = self.mirrored & !m | (self.mirrored & m).wrapping_sub(1 << (3 * block as usize + a)) & m;
     }
 }
 

@@ -140,27 +140,42 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
         desc[k0] = wide_fetch(n, k0);
     }
 
+    // The current cell: level k, its lower corner lo in the mirrored frame, in voxels; over empty
+    // space an aligned block of 2^block cells per axis of level k (cpu::wide_dda).
     var k = k0;
+    var block = 0u;
     var t = span.x;
     var lo = wide_descend(r, inv, t, vec3<i32>(0), grid_level, wide_shift(k0));
     var advances = 0u;
     loop {
         count_step();
         let shift = wide_shift(k);
-        let exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
+        var parent = grid_level;
+        if (k > k0) {
+            parent = wide_shift(k - 1u);
+        }
+        let bits = parent - shift;
+        var exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
         let tc_max = min(min(exit.x, exit.y), exit.z);
         let cell = vec3<u32>((lo ^ flip) >> vec3<u32>(shift));
+        let local = cell & vec3<u32>((1u << bits) - 1u);
         var occupied = false;
         var top = NO_NODE;
-        var local = vec3<u32>(0u);
         if (k == 0u) {
             top = wide_top(cell);
             occupied = top != NO_NODE;
-        } else {
-            local = cell & vec3<u32>((1u << (wide_shift(k - 1u) - shift)) - 1u);
+        } else if (block == 0u) {
             occupied = wide_occupied(desc[k], k, local);
+        } else {
+            occupied = wide_empty_block(desc[k], k, wide_slot(local), block) < block;
         }
         if (occupied && t <= min(tc_max, t1)) {
+            if (block > 0u) {
+                // Into the block's cell the ray is in at t.
+                lo = wide_descend(r, inv, t, lo, shift + block, shift);
+                block = 0u;
+                continue;
+            }
             if (k == last) {
                 return WideHit(true, t, vec3<u32>(lo ^ flip));
             }
@@ -176,20 +191,24 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
             continue;
         }
 
-        // ADVANCE through the exit plane(s) — or past the empty block of 2^coalesce cells per axis
-        // around the cell (cpu::wide_dda), entering the next block at the cell the ray is in.
+        // ADVANCE through the exit plane(s); an empty cell inside a wholly empty aligned block is
+        // stepped over as that block, and the DDA stays at the block's scale until one holds
+        // something (cpu::wide_dda).
         var coalesce = 0u;
-        let bits = select(0u, wide_shift(k - 1u) - shift, k > 0u);
         if (k > 0u && bits >= 2u) {
-            coalesce = wide_empty_block(desc[k], k, wide_slot(local), bits - 1u);
+            coalesce = max(block, wide_empty_block(desc[k], k, wide_slot(local), bits - 1u));
         }
-        let side = shift + coalesce;
-        let corner = lo & vec3<i32>(~((1 << side) - 1));
-        let bexit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(corner) * h);
-        let t_exit = min(min(bexit.x, bexit.y), bexit.z);
-        var next = corner;
+        var t_exit = tc_max;
+        if (coalesce > block) {
+            block = coalesce;
+            lo = lo & vec3<i32>(~((1 << (shift + block)) - 1));
+            exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
+            t_exit = min(min(exit.x, exit.y), exit.z);
+        }
+        let side = shift + block;
+        var next = lo;
         for (var a = 0u; a < 3u; a++) {
-            if (bexit[a] <= t_exit) {
+            if (exit[a] <= t_exit) {
                 next[a] -= 1 << side;
             }
         }
@@ -203,10 +222,7 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
         }
         // POP while the new cell lies outside its parent (a step out of the grid changes every bit).
         let changed = bitcast<u32>(lo.x ^ next.x) | bitcast<u32>(lo.y ^ next.y) | bitcast<u32>(lo.z ^ next.z);
-        var parent = grid_level;
-        if (k > k0) {
-            parent = wide_shift(k - 1u);
-        }
+        lo = next;
         if ((changed >> parent) != 0u) {
             loop {
                 if (k > k0 && (changed >> wide_shift(k - 1u)) != 0u) {
@@ -218,11 +234,8 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
             if (k == k0 && (changed >> grid_level) != 0u) {
                 return miss;
             }
-            lo = next & vec3<i32>(~((1 << wide_shift(k)) - 1));
-        } else if (coalesce > 0u) {
-            lo = wide_descend(r, inv, t, next, side, shift);
-        } else {
-            lo = next;
+            block = 0u;
+            lo = lo & vec3<i32>(~((1 << wide_shift(k)) - 1));
         }
     }
     return miss;
