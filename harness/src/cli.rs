@@ -113,7 +113,7 @@ pub enum Preset {
     EsvoBeam,
     /// Grid or octree on the same voxels (seed 003, issue 28): the hierarchical grids — vdb (dense
     /// and compact tables, NanoVDB's HDDA, and compact with empty blocks coalesced), tree64 (tree
-    /// and DAG), brickmap — beside svo, esvo (contours off, and on) and svdag, and bvh on the
+    /// and DAG), brickmap — beside svo, esvo (contours off, and on to 4096³) and svdag, and bvh on the
     /// triangles, on bunny, dragon, city, menger, mandelbulb and room at 1024³…8192³ (as far as
     /// memory allows) at 1024×1024: Mrays/s and × esvo, steps and node visits per ray and where
     /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,
@@ -471,8 +471,12 @@ impl Preset {
             (Preset::VoxelGrids, "tree64") => VOXEL_GRID_LEVELS
                 .flat_map(|l| [at(l, &["tree64.dag=off"], None), at(l, &["tree64.dag=on"], Some("dag"))])
                 .collect(),
+            // Contours on up to 4096³ (at 8192³ a build takes minutes a scene).
             (Preset::VoxelGrids, "esvo") => VOXEL_GRID_LEVELS
-                .flat_map(|l| [at(l, &["esvo.contours=off"], None), at(l, &["esvo.contours=on"], Some("contours"))])
+                .flat_map(|l| {
+                    let contours = (l <= 12).then(|| at(l, &["esvo.contours=on"], Some("contours")));
+                    [Some(at(l, &["esvo.contours=off"], None)), contours].into_iter().flatten()
+                })
                 .collect(),
             (Preset::VoxelGrids, "brickmap" | "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)

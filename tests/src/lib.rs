@@ -180,3 +180,31 @@ pub fn build_entry(entry: &kernels::StructureEntry, input: &structures::BuildInp
         Err(e) => panic!("{}: {e}", entry.name),
     }
 }
+
+/// Distinct subtrees of a voxel set per level, by brute force from the voxels' Morton codes
+/// (increasing) alone: a node whose cube is `2^side` voxels wide is the set of its voxels relative
+/// to its corner, so equal sets are equal subtrees. The minimal DAG has exactly these nodes.
+pub fn distinct_subtrees(codes: &[u64], sides: impl IntoIterator<Item = u32>) -> Vec<u64> {
+    sides
+        .into_iter()
+        .map(|side| {
+            let bits = 3 * side;
+            let mut seen = std::collections::HashSet::new();
+            for group in codes.chunk_by(|a, b| a >> bits == b >> bits) {
+                seen.insert(group.iter().map(|c| c & ((1u64 << bits) - 1)).collect::<Vec<_>>());
+            }
+            seen.len() as u64
+        })
+        .collect()
+}
+
+/// The primary rays of `scene`'s camera at `size`², rendered through `accel` (shading seed 1).
+pub fn primary_frame(accel: &dyn Traverse, scene: &Scene, size: u32) -> kernels::cpu::render::Frame {
+    let camera = Camera::new(scene.camera_spec(), size, size);
+    kernels::cpu::render::render(
+        accel,
+        &camera,
+        &kernels::cpu::render::ShadeContext::for_scene(scene, 1),
+        kernels::cpu::render::Workload::Primary,
+    )
+}

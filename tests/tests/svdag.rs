@@ -14,16 +14,15 @@
 use std::sync::Arc;
 
 use kernels::Traverse;
-use kernels::cpu::render::{Frame, ShadeContext, Workload, render};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use scenes::{Camera, Scene};
+use scenes::Scene;
 use structures::svdag::Svdag;
 use structures::svdag::validate::{contains, expand, validate};
 use structures::svo::Svo;
 use structures::voxel::{VoxelGrid, morton, voxelize_all};
 use structures::{BuildInput, Params};
-use tests::ray_set;
+use tests::{distinct_subtrees, primary_frame as primary, ray_set};
 
 fn load(name: &str) -> Scene {
     scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -39,11 +38,6 @@ fn svdag(scene: &Scene, level: u32, extra: &[&str]) -> Svdag {
 fn svo(scene: &Scene, level: u32) -> Svo {
     let params = Params::parse([format!("voxel.levels={level}").as_str()]).expect("params");
     Svo::build(&BuildInput { scene, triangles: scene.triangles(), params: &params }).expect("svo")
-}
-
-fn primary(accel: &dyn Traverse, scene: &Scene, size: u32) -> Frame {
-    let camera = Camera::new(scene.camera_spec(), size, size);
-    render(accel, &camera, &ShadeContext::for_scene(scene, 1), Workload::Primary)
 }
 
 fn exact_at_level_9(name: &str) {
@@ -110,21 +104,6 @@ fn random_rays_and_point_queries_at_level_12() {
     }
 }
 
-/// Distinct subtrees per level by brute force — a level-`l` node is the set of its voxels relative
-/// to its corner — from the voxelisation's codes alone.
-fn distinct_subtrees(codes: &[u64], level: u32, bottom: u32) -> Vec<u64> {
-    (0..=bottom)
-        .map(|l| {
-            let shift = 3 * (level - l);
-            let mut seen = std::collections::HashSet::new();
-            for group in codes.chunk_by(|a, b| a >> shift == b >> shift) {
-                seen.insert(group.iter().map(|c| c & ((1u64 << shift) - 1)).collect::<Vec<_>>());
-            }
-            seen.len() as u64
-        })
-        .collect()
-}
-
 #[test]
 fn node_counts_are_the_minimal_dags_on_scenes() {
     for (name, level) in [("bunny", 7), ("menger", 7), ("city", 6), ("mandelbulb", 6)] {
@@ -132,7 +111,11 @@ fn node_counts_are_the_minimal_dags_on_scenes() {
         let (set, _) = voxelize_all(&scene, &VoxelGrid::fit(scene.bounds(), level));
         for (leaves, bottom) in [("bits", level - 1), ("bricks", level - 2)] {
             let dag = svdag(&scene, level, &[&format!("svdag.leaves={leaves}")]);
-            assert_eq!(dag.stats.nodes_per_level, distinct_subtrees(&set.codes, level, bottom), "{name} {leaves}");
+            assert_eq!(
+                dag.stats.nodes_per_level,
+                distinct_subtrees(&set.codes, (level - bottom..=level).rev()),
+                "{name} {leaves}"
+            );
         }
     }
 }

@@ -18,12 +18,11 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use kernels::cpu::render::{Frame, ShadeContext, Workload, render};
 use kernels::cpu::voxel_dda;
 use kernels::{Counters, Traverse};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use scenes::{Camera, Ray, Scene};
+use scenes::{Ray, Scene};
 use structures::brickmap::{self, Brickmap};
 use structures::svdag::Svdag;
 use structures::svo::Svo;
@@ -32,7 +31,7 @@ use structures::vdb::{self, Vdb, VdbParams};
 use structures::voxel::wide::DdaLevels;
 use structures::voxel::{VoxelGrid, VoxelSet, build_octree, morton, voxelize_all};
 use structures::{BuildInput, Params, Structure};
-use tests::ray_set;
+use tests::{distinct_subtrees, primary_frame as primary, ray_set};
 
 fn load(name: &str) -> Scene {
     scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -124,11 +123,6 @@ impl Grids {
 
 fn svo(scene: &Scene, level: u32) -> Svo {
     Svo::build(&input(scene, &params(level, &[]))).expect("svo")
-}
-
-fn primary(accel: &dyn Traverse, scene: &Scene, size: u32) -> Frame {
-    let camera = Camera::new(scene.camera_spec(), size, size);
-    render(accel, &camera, &ShadeContext::for_scene(scene, 1), Workload::Primary)
 }
 
 fn exact_at_level_9(name: &str) {
@@ -249,22 +243,6 @@ fn stream_builds_equal_octree_builds_word_for_word() {
     }
 }
 
-/// Distinct subtrees per level of a 64-tree by brute force, from the voxel codes alone: a node of
-/// side `2^shift` is the set of its voxels relative to its corner.
-fn distinct_subtrees(codes: &[u64], shifts: &[u32]) -> Vec<u64> {
-    shifts
-        .iter()
-        .map(|&s| {
-            let bits = 3 * s;
-            let mut seen = std::collections::HashSet::new();
-            for group in codes.chunk_by(|a, b| a >> bits == b >> bits) {
-                seen.insert(group.iter().map(|c| c & ((1u64 << bits) - 1)).collect::<Vec<_>>());
-            }
-            seen.len() as u64
-        })
-        .collect()
-}
-
 #[test]
 fn the_64_tree_dag_is_the_minimal_dag() {
     let mut saved = false;
@@ -276,7 +254,7 @@ fn the_64_tree_dag_is_the_minimal_dag() {
         let tree = Tree64::build(&input(&scene, &params(level, &[]))).expect("tree");
         tree64::validate::validate(&dag).unwrap_or_else(|e| panic!("{name}: {e}"));
         let shifts = dag.shape().shifts;
-        assert_eq!(dag.stats.nodes_per_level, distinct_subtrees(&set.codes, &shifts), "{name} L={level}");
+        assert_eq!(dag.stats.nodes_per_level, distinct_subtrees(&set.codes, shifts), "{name} L={level}");
         assert_eq!(dag.stats.tree_nodes_per_level, tree.stats.nodes_per_level, "{name}: the tree before merging");
         let (merged, whole) = (dag.memory().total_bytes(), tree.memory().total_bytes());
         eprintln!("{name} L={level}: 64-tree {whole} B, its DAG {merged} B");

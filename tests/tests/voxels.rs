@@ -16,7 +16,7 @@
 use std::sync::Arc;
 
 use kernels::Traverse;
-use kernels::cpu::render::{Frame, ShadeContext, Workload, render, render_counted};
+use kernels::cpu::render::{Frame, ShadeContext, Workload, render_counted};
 use kernels::cpu::voxel_dda;
 use scenes::{Camera, Scene};
 use structures::esvo::Esvo;
@@ -25,7 +25,7 @@ use structures::svo::Svo;
 use structures::svo_naive::SvoNaive;
 use structures::voxel::{VoxelGrid, VoxelSet, voxelize_all};
 use structures::{BuildInput, Params, Structure};
-use tests::ray_set;
+use tests::{primary_frame as primary, ray_set};
 
 fn load(name: &str) -> Scene {
     scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -121,11 +121,6 @@ fn exact_at_level_8_with_far_pointers() {
     let scene = load("bunny");
     let b = build(&scene, 8, false);
     assert!(b.esvo_raw.stats.far_pointers > 0, "the bunny at L = 8 exercises far pointers");
-}
-
-fn primary(accel: &dyn Traverse, scene: &Scene, size: u32) -> Frame {
-    let camera = Camera::new(scene.camera_spec(), size, size);
-    render(accel, &camera, &ShadeContext::for_scene(scene, 1), Workload::Primary)
 }
 
 /// Pixels whose hit (voxel code and t bits) differs between two renders.

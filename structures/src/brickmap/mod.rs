@@ -18,13 +18,12 @@ pub mod validate;
 
 use std::time::Instant;
 
-use scenes::Scene;
 use serde::Serialize;
 use serde_json::json;
 
 use crate::svo::voxel_params_json;
-use crate::voxel::wide::{DdaLevels, StreamCounts, WideShape, WideSink, WideStream, feed_from_octree};
-use crate::voxel::{self, Octree, VoxelGrid, VoxelizeStats, morton};
+use crate::voxel::wide::{DdaLevels, StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
+use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
 
 /// `log2` of a brick's side: 8³ voxels.
@@ -84,9 +83,7 @@ impl Brickmap {
         let start = Instant::now();
         let grid = VoxelGrid::fit(input.scene.bounds(), level);
         let (mut sink, shape) = Sink::new(level);
-        let mut stream = WideStream::new(&shape);
-        let voxelize = stream_voxels(input.scene, &grid, |code| stream.push(&mut sink, code));
-        let counts = stream.finish(&mut sink);
+        let (counts, voxelize) = stream_voxelization(input.scene, &grid, &shape, &mut sink);
         Ok(Self::finish(grid, sink, counts, voxelize, start))
     }
 
@@ -136,18 +133,6 @@ impl Brickmap {
     pub fn top_index(&self, c: [u32; 3]) -> usize {
         let n = self.side as usize;
         c[0] as usize + n * (c[1] as usize + n * c[2] as usize)
-    }
-}
-
-/// Streams the voxeliser's codes of `scene` into `push`, one at a time.
-pub(crate) fn stream_voxels(scene: &Scene, grid: &VoxelGrid, mut push: impl FnMut(u64) + Send) -> VoxelizeStats {
-    let stats = voxel::voxelize(scene, grid, |chunk| {
-        chunk.codes.iter().for_each(|&c| push(c));
-        Ok::<(), std::convert::Infallible>(())
-    });
-    match stats {
-        Ok(s) => s,
-        Err(never) => match never {},
     }
 }
 

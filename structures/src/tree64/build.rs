@@ -15,26 +15,15 @@ use super::layout::{BRICK_WORDS, DESCRIPTOR_WORDS, PTR, descriptor, mask};
 use super::{Tree64, Tree64Params, Tree64Stats};
 use crate::BuildError;
 use crate::intern::{Interned, intern};
-use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, WideStream, feed_from_octree};
-use crate::voxel::{self, Octree, VoxelGrid, VoxelizeStats};
+use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
+use crate::voxel::{Octree, VoxelGrid, VoxelizeStats};
 
 pub fn build(scene: &Scene, params: Tree64Params) -> Result<Tree64, BuildError> {
     let start = Instant::now();
     let grid = VoxelGrid::fit(scene.bounds(), params.level);
     let shape = params.shape();
     let mut sink = Lists::new(&shape, params.dag);
-    let mut stream = WideStream::new(&shape);
-    let voxelize = voxel::voxelize(scene, &grid, |chunk| {
-        for &code in &chunk.codes {
-            stream.push(&mut sink, code);
-        }
-        Ok::<(), std::convert::Infallible>(())
-    });
-    let voxelize = match voxelize {
-        Ok(v) => v,
-        Err(never) => match never {},
-    };
-    let counts = stream.finish(&mut sink);
+    let (counts, voxelize) = stream_voxelization(scene, &grid, &shape, &mut sink);
     finish(grid, params, sink, counts, voxelize, start)
 }
 

@@ -12,26 +12,15 @@ use scenes::Scene;
 use super::layout::{LevelOffsets, Sizes, Tables, mask_words, rank_words};
 use super::{Vdb, VdbParams, VdbStats};
 use crate::BuildError;
-use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, WideStream, feed_from_octree};
-use crate::voxel::{self, Octree, VoxelGrid, VoxelizeStats, morton};
+use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
+use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 
 pub fn build(scene: &Scene, params: VdbParams) -> Result<Vdb, BuildError> {
     let start = Instant::now();
     let grid = VoxelGrid::fit(scene.bounds(), params.level);
     let shape = params.shape();
     let mut sink = Levels::new(&params, &shape);
-    let mut stream = WideStream::new(&shape);
-    let voxelize = voxel::voxelize(scene, &grid, |chunk| {
-        for &code in &chunk.codes {
-            stream.push(&mut sink, code);
-        }
-        Ok::<(), std::convert::Infallible>(())
-    });
-    let voxelize = match voxelize {
-        Ok(v) => v,
-        Err(never) => match never {},
-    };
-    let counts = stream.finish(&mut sink);
+    let (counts, voxelize) = stream_voxelization(scene, &grid, &shape, &mut sink);
     finish(grid, params, sink, counts, voxelize, start)
 }
 

@@ -217,6 +217,32 @@ impl<H: Copy> WideStream<H> {
     }
 }
 
+/// The streamed build: voxelises `scene` into `grid` and feeds every voxel, in Morton order, through
+/// a [`WideStream`] of `shape` into `sink` (the voxeliser's chunks are consumed as they come).
+pub fn stream_voxelization<S>(
+    scene: &scenes::Scene,
+    grid: &super::VoxelGrid,
+    shape: &WideShape,
+    sink: &mut S,
+) -> (StreamCounts, super::VoxelizeStats)
+where
+    S: WideSink + Send,
+    S::Handle: Send,
+{
+    let mut stream = WideStream::new(shape);
+    let voxelize = super::voxelize(scene, grid, |chunk| {
+        for &code in &chunk.codes {
+            stream.push(sink, code);
+        }
+        Ok::<(), std::convert::Infallible>(())
+    });
+    let voxelize = match voxelize {
+        Ok(v) => v,
+        Err(never) => match never {},
+    };
+    (stream.finish(sink), voxelize)
+}
+
 /// What a build met.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StreamCounts {
