@@ -238,7 +238,7 @@ fn stream_builds_equal_octree_builds_word_for_word() {
             assert_eq!(stream.stats.nodes_per_level, tree.stats.nodes_per_level);
         }
         let stream = Brickmap::build(&input(&scene, &params(level, &[]))).expect("brickmap");
-        let tree = Brickmap::from_octree(&octree);
+        let tree = brickmap::build::from_octree(&octree);
         assert!(stream.top == tree.top && stream.bricks == tree.bricks, "{name} L={level} brickmap");
     }
 }

@@ -4,32 +4,29 @@
 //! voxel bits. The top DDA steps over empty cells whole; voxel steps happen only inside bricks.
 //! It is the voxel twin of the triangle grids' `rg2`: no tree, one level of indirection.
 //!
-//! Layout (the words the kernels read):
-//! - `grid`: `(2^L / 8)³` words, x fastest (`x + n·(y + n·z)`): 0 for an empty cell, else the
-//!   cell's brick index plus one;
-//! - `bricks`: [`BRICK_WORDS`] words per brick, the 512-bit voxel mask, bit = the voxel's local
-//!   Morton code (x in bit 0), in the order the voxeliser's stream met the cells.
+//! | file | what |
+//! |---|---|
+//! | [`layout`] | the words: the dense top grid of brick pointers, the 512-bit bricks |
+//! | [`build`] | voxeliser stream (or canonical octree) → bricks and top grid |
+//! | [`validate`] | structural checks, expansion back to voxels, point queries |
 //!
-//! Built straight from the voxeliser's stream through the shared wide-tree build
-//! ([`crate::voxel::wide`], one level of cubes under the top grid). CPU kernel:
-//! `kernels::cpu::brickmap` over `kernels::cpu::wide_dda`; WGSL: `kernels/src/gpu/brickmap.wgsl`.
+//! CPU kernel: `kernels::cpu::brickmap` over the shared hierarchical DDA (`kernels::cpu::wide_dda`);
+//! WGSL: `kernels/src/gpu/brickmap.wgsl` over `wide_dda.wgsl`.
 
+pub mod build;
+pub mod layout;
 pub mod validate;
-
-use std::time::Instant;
 
 use serde::Serialize;
 use serde_json::json;
 
 use crate::svo::voxel_params_json;
-use crate::voxel::wide::{DdaLevels, StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
-use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
+use crate::voxel::wide::{DdaLevels, WideShape};
+use crate::voxel::{VoxelGrid, VoxelizeStats};
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
 
-/// `log2` of a brick's side: 8³ voxels.
-pub const BRICK_SHIFT: u32 = 3;
-/// Words of a brick's voxel mask (512 bits).
-pub const BRICK_WORDS: usize = 16;
+pub use layout::{BRICK_SHIFT, BRICK_WORDS};
+
 /// The finest grid the brickmap builds: its top grid (`4 · (2^L / 8)³` bytes) is 4 GiB at 2^13.
 pub const MAX_BRICKMAP_LEVEL: u32 = 14;
 
@@ -50,7 +47,7 @@ pub struct Brickmap {
     pub grid: VoxelGrid,
     /// The top grid's cells per axis.
     pub side: u32,
-    /// See the module doc.
+    /// The top grid and the bricks (see [`layout`]).
     pub top: Vec<u32>,
     pub bricks: Vec<u32>,
     /// The box the bricks occupy, in octree space (world-oriented): the caster clips rays to it.
@@ -79,45 +76,7 @@ pub fn level_param(params: &crate::Params) -> Result<u32, BuildError> {
 
 impl Brickmap {
     pub fn build(input: &BuildInput) -> Result<Self, BuildError> {
-        let level = level_param(input.params)?;
-        let start = Instant::now();
-        let grid = VoxelGrid::fit(input.scene.bounds(), level);
-        let (mut sink, shape) = Sink::new(level);
-        let (counts, voxelize) = stream_voxelization(input.scene, &grid, &shape, &mut sink);
-        Ok(Self::finish(grid, sink, counts, voxelize, start))
-    }
-
-    /// The same brickmap from the canonical octree (the tests' second path to the same words).
-    pub fn from_octree(tree: &Octree) -> Self {
-        let start = Instant::now();
-        let (mut sink, shape) = Sink::new(tree.grid.level);
-        let counts = feed_from_octree(tree, &shape, &mut sink);
-        Self::finish(tree.grid, sink, counts, VoxelizeStats::default(), start)
-    }
-
-    fn finish(grid: VoxelGrid, sink: Sink, counts: StreamCounts, voxelize: VoxelizeStats, start: Instant) -> Self {
-        let bricks = (sink.bricks.len() / BRICK_WORDS) as u64;
-        let top_cells = sink.top.len() as u64;
-        let stats = BrickmapStats {
-            top_cells,
-            bricks,
-            occupancy: bricks as f64 / top_cells.max(1) as f64,
-            voxels_per_brick: counts.voxels as f64 / bricks.max(1) as f64,
-            build_ms: start.elapsed().as_secs_f64() * 1e3,
-        };
-        let occupied = counts.bounds.octree_box(grid.level.saturating_sub(BRICK_SHIFT));
-        let levels = WideShape::new(grid.level, vec![BRICK_SHIFT]).dda_levels();
-        Self {
-            grid,
-            side: sink.side,
-            top: sink.top,
-            bricks: sink.bricks,
-            occupied,
-            levels,
-            voxels: counts.voxels,
-            stats,
-            voxelize,
-        }
+        build::build(input)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -131,42 +90,7 @@ impl Brickmap {
     /// The top grid's index of cell `c`.
     #[inline(always)]
     pub fn top_index(&self, c: [u32; 3]) -> usize {
-        let n = self.side as usize;
-        c[0] as usize + n * (c[1] as usize + n * c[2] as usize)
-    }
-}
-
-struct Sink {
-    side: u32,
-    top: Vec<u32>,
-    bricks: Vec<u32>,
-}
-
-impl Sink {
-    fn new(level: u32) -> (Self, WideShape) {
-        let side = 1u32 << level.saturating_sub(BRICK_SHIFT);
-        let cells = (side as usize).pow(3);
-        (Self { side, top: vec![0; cells], bricks: Vec::new() }, WideShape::new(level, vec![BRICK_SHIFT]))
-    }
-}
-
-impl WideSink for Sink {
-    type Handle = u32;
-
-    fn leaf(&mut self, _code: u64, voxels: &[u64]) -> u32 {
-        let index = (self.bricks.len() / BRICK_WORDS) as u32;
-        self.bricks.extend(voxels.iter().flat_map(|&w| [w as u32, (w >> 32) as u32]));
-        index
-    }
-
-    fn node(&mut self, _level: usize, _code: u64, _children: &[(u32, u32)]) -> u32 {
-        unreachable!("a brickmap has no interior nodes below its top grid")
-    }
-
-    fn top(&mut self, code: u64, brick: u32) {
-        let c = morton::decode(code);
-        let n = self.side as usize;
-        self.top[c[0] as usize + n * (c[1] as usize + n * c[2] as usize)] = brick + 1;
+        layout::top_index(self.side, c)
     }
 }
 

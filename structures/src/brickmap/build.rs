@@ -1,0 +1,87 @@
+//! Brickmap builds: the voxeliser's stream (the top grid and the bricks met so far, a window of
+//! the voxeliser's chunks) or the canonical octree, through the shared wide-tree builds
+//! ([`crate::voxel::wide`], one level of 8³ cubes under the top grid), which meet the bricks in
+//! the same order, so both give the same words.
+
+use std::time::Instant;
+
+use super::layout::{BRICK_SHIFT, BRICK_WORDS, top_index};
+use super::{Brickmap, BrickmapStats, level_param};
+use crate::voxel::wide::{StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
+use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
+use crate::{BuildError, BuildInput};
+
+pub fn build(input: &BuildInput) -> Result<Brickmap, BuildError> {
+    let level = level_param(input.params)?;
+    let start = Instant::now();
+    let grid = VoxelGrid::fit(input.scene.bounds(), level);
+    let (mut sink, shape) = Sink::new(level);
+    let (counts, voxelize) = stream_voxelization(input.scene, &grid, &shape, &mut sink);
+    Ok(finish(grid, sink, counts, voxelize, start))
+}
+
+/// The same brickmap from the canonical octree (the tests' second path to the same words).
+pub fn from_octree(tree: &Octree) -> Brickmap {
+    let start = Instant::now();
+    let (mut sink, shape) = Sink::new(tree.grid.level);
+    let counts = feed_from_octree(tree, &shape, &mut sink);
+    finish(tree.grid, sink, counts, VoxelizeStats::default(), start)
+}
+
+fn finish(grid: VoxelGrid, sink: Sink, counts: StreamCounts, voxelize: VoxelizeStats, start: Instant) -> Brickmap {
+    let bricks = (sink.bricks.len() / BRICK_WORDS) as u64;
+    let top_cells = sink.top.len() as u64;
+    let stats = BrickmapStats {
+        top_cells,
+        bricks,
+        occupancy: bricks as f64 / top_cells.max(1) as f64,
+        voxels_per_brick: counts.voxels as f64 / bricks.max(1) as f64,
+        build_ms: start.elapsed().as_secs_f64() * 1e3,
+    };
+    let occupied = counts.bounds.octree_box(grid.level.saturating_sub(BRICK_SHIFT));
+    let levels = WideShape::new(grid.level, vec![BRICK_SHIFT]).dda_levels();
+    Brickmap {
+        grid,
+        side: sink.side,
+        top: sink.top,
+        bricks: sink.bricks,
+        occupied,
+        levels,
+        voxels: counts.voxels,
+        stats,
+        voxelize,
+    }
+}
+
+/// The build's sink: a brick's handle is its index; a top entry writes its cell.
+struct Sink {
+    side: u32,
+    top: Vec<u32>,
+    bricks: Vec<u32>,
+}
+
+impl Sink {
+    fn new(level: u32) -> (Self, WideShape) {
+        let side = 1u32 << level.saturating_sub(BRICK_SHIFT);
+        let cells = (side as usize).pow(3);
+        (Self { side, top: vec![0; cells], bricks: Vec::new() }, WideShape::new(level, vec![BRICK_SHIFT]))
+    }
+}
+
+impl WideSink for Sink {
+    type Handle = u32;
+
+    fn leaf(&mut self, _code: u64, voxels: &[u64]) -> u32 {
+        let index = (self.bricks.len() / BRICK_WORDS) as u32;
+        self.bricks.extend(voxels.iter().flat_map(|&w| [w as u32, (w >> 32) as u32]));
+        index
+    }
+
+    fn node(&mut self, _level: usize, _code: u64, _children: &[(u32, u32)]) -> u32 {
+        unreachable!("a brickmap has no interior nodes below its top grid")
+    }
+
+    fn top(&mut self, code: u64, brick: u32) {
+        self.top[top_index(self.side, morton::decode(code))] = brick + 1;
+    }
+}
