@@ -8,7 +8,10 @@
 //! ray is in at the current `t`), and climbs back up when a step leaves the parent — so empty
 //! space is skipped at its own level (a whole top node, a lower node, a leaf) and voxel steps
 //! happen only inside occupied leaves. The stack of nodes per level is NanoVDB's accessor cache:
-//! climbing up costs nothing.
+//! climbing up costs nothing. Where a layout says so ([`WideNodes::empty_block`]: the 64-tree's
+//! "2³ skip coalescing", `vdb.skip=block`), an empty cell inside a wholly empty aligned block of
+//! `2^j` cells per axis is stepped over as that block — in Morton order a block's children are
+//! consecutive mask bits — and the DDA stays at the block's scale until a block holds something.
 //!
 //! Exactness: the DDA runs in [`OctreeRay`]'s mirrored frame (every direction component
 //! negative) on integer voxel coordinates, and every plane distance goes through
