@@ -7,7 +7,7 @@
 // - `refs`: triangle ids, grouped by leaf.
 // - `triangles`: the scene's triangle soup (read by triangle.wgsl).
 
-// structures::bvh::MAX_DEPTH: the builder refuses deeper trees (checked by a Rust test).
+// structures::bvh::MAX_DEPTH: the builder guarantees no deeper tree (the constant is checked by a Rust test).
 const BVH_MAX_DEPTH: u32 = 96u;
 // cpu::bvh's CULL_MARGIN, 1 + 1/8192: boxes entered this little beyond the best hit are still
 // opened, so a grazing hit whose t rounds below its own box's entry does not cull a nearer one.

@@ -16,11 +16,11 @@ use std::sync::Arc;
 use scenes::Triangle;
 
 use crate::{MemoryReport, Structure};
-pub use build::{BvhPreset, build};
+pub use build::{BvhPreset, Shape, build};
 pub use layout::BvhNode;
 
-/// Deepest tree the traversal stack holds; the builder refuses deeper trees rather than letting a
-/// kernel overflow its stack.
+/// Deepest tree the traversal stacks hold (CPU and WGSL). The builder guarantees it for any soup:
+/// a deeper obvhs tree is replaced by a median-split tree, at most ⌈log₂ N⌉ + 1 ≤ 33 deep.
 pub const MAX_DEPTH: usize = 96;
 
 /// A flattened binary BVH. Node 0 is the root; an inner node's children are adjacent.
@@ -33,6 +33,8 @@ pub struct Bvh {
     pub preset: BvhPreset,
     /// Longest root-to-leaf path, in nodes.
     pub depth: usize,
+    /// How the tree was made: obvhs's (over groups of coincident triangles, if any), or median splits.
+    pub shape: Shape,
 }
 
 impl Structure for Bvh {
@@ -47,11 +49,20 @@ impl Structure for Bvh {
     }
 
     fn params(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut params = serde_json::json!({
             "builder": "obvhs PLOC",
             "preset": self.preset.name(),
             "max_prims_per_leaf": self.preset.obvhs_params().max_prims_per_leaf,
             "depth": self.depth,
-        })
+        });
+        match self.shape {
+            Shape::Obvhs { coincident: 0 } => {}
+            Shape::Obvhs { coincident } => params["coincident_triangles"] = coincident.into(),
+            Shape::Median { obvhs_depth } => {
+                params["builder"] = "median split".into();
+                params["obvhs_depth"] = obvhs_depth.into();
+            }
+        }
+        params
     }
 }

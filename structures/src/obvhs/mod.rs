@@ -39,6 +39,8 @@ pub struct ObvhsBvh2 {
     /// `triangles[i]` is the scene's triangle `bvh.primitive_indices[i]`.
     pub triangles: Vec<ObvhsTriangle>,
     pub preset: BvhPreset,
+    /// Longest root-to-leaf path, in nodes (below the crate's stack size, `bvh.max_depth`).
+    pub depth: usize,
 }
 
 /// The crate's CWBVH and its triangles in traversal order.
@@ -68,9 +70,41 @@ impl ObvhsBvh2 {
         } else {
             build_bvh2_from_tris(&tris, preset.obvhs_params(), &mut Duration::default())
         };
+        // The crate's traversal stack holds `max_depth` entries and, when full, overwrites its top
+        // without a word (`faststack::StackStack::push`): a deeper tree would miss hits silently.
+        // obvhs's PLOC builds such trees over many triangles with equal boxes (issue 31).
+        let depth = bvh2_depth(&bvh);
+        if depth >= bvh.max_depth {
+            return Err(BuildError::Limit {
+                structure: "obvhs",
+                detail: format!(
+                    "tree depth {depth} reaches the crate's traversal stack ({}), which would drop subtrees \
+                     silently (obvhs's PLOC chains triangles with equal boxes: coincident or duplicated faces)",
+                    bvh.max_depth
+                ),
+            });
+        }
         let triangles = reorder(&tris, &bvh.primitive_indices);
-        Ok(Self { bvh, triangles, preset })
+        Ok(Self { bvh, triangles, preset, depth })
     }
+}
+
+/// Longest root-to-leaf path of a BVH2, in nodes (0 for an empty tree).
+fn bvh2_depth(bvh: &Bvh2) -> usize {
+    if bvh.nodes.is_empty() {
+        return 0;
+    }
+    let mut deepest = 0;
+    let mut pending = vec![(0usize, 1usize)];
+    while let Some((index, depth)) = pending.pop() {
+        deepest = deepest.max(depth);
+        let node = &bvh.nodes[index];
+        if node.prim_count == 0 {
+            pending.push((node.first_index as usize, depth + 1));
+            pending.push((node.first_index as usize + 1, depth + 1));
+        }
+    }
+    deepest
 }
 
 impl ObvhsCwbvh {
@@ -147,7 +181,8 @@ impl Structure for ObvhsBvh2 {
             "traversal": "obvhs Bvh2::ray_traverse, Möller–Trumbore",
             "preset": self.preset.name(),
             "max_prims_per_leaf": self.preset.obvhs_params().max_prims_per_leaf,
-            "depth": self.bvh.max_depth,
+            "depth": self.depth,
+            "stack": self.bvh.max_depth,
         })
     }
 }
