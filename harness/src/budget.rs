@@ -23,6 +23,29 @@ use structures::{BuildInput, Params};
 /// triangle soup every structure reads (36 B), with headroom for the loader's temporaries.
 pub const SCENE_BYTES_PER_TRIANGLE: u64 = 256;
 
+/// Loading a scene file, per byte of OBJ text (plain, or as an `.obj.gz` decompresses): the text,
+/// tobj's arrays, the mesh and the triangle soup (a vertex record of ~33 bytes becomes 12 bytes
+/// twice, a face record of ~20 bytes 12 twice and 36 in the soup).
+pub const LOAD_BYTES_PER_OBJ_BYTE: u64 = 4;
+/// An `.obj.gz` file, per compressed byte, weighed before it is read: OBJ text compresses about
+/// 3–5×, so 8× its size in text. A stream that expands further is cut where the text passes what
+/// the budget allows ([`Budget::most_units`] of [`LOAD_BYTES_PER_OBJ_BYTE`]).
+pub const LOAD_BYTES_PER_GZ_BYTE: u64 = 8 * LOAD_BYTES_PER_OBJ_BYTE;
+/// A glTF or GLB file, per byte: binary positions and indices, copied into the mesh and expanded
+/// into the soup (12 bytes of indices become 36 of corners).
+pub const LOAD_BYTES_PER_GLTF_BYTE: u64 = 5;
+
+/// Bytes a scene file of `file_bytes` takes to load, by its extension.
+pub fn scene_file_bytes(path: &str, file_bytes: u64) -> u64 {
+    let lower = path.to_ascii_lowercase();
+    let per_byte = match () {
+        _ if lower.ends_with(".obj.gz") => LOAD_BYTES_PER_GZ_BYTE,
+        _ if lower.ends_with(".obj") => LOAD_BYTES_PER_OBJ_BYTE,
+        _ => LOAD_BYTES_PER_GLTF_BYTE,
+    };
+    file_bytes.saturating_mul(per_byte)
+}
+
 /// A case's frames: the timed frame, the counted frame and its per-pixel counters, the CPU
 /// primary frame kept for GPU rows and the reference's, the heat map, and both PNG buffers.
 /// Measured: 116 B per pixel at 1024² (every render row records `peak_bytes` beside this
@@ -94,6 +117,11 @@ impl Budget {
             (None, Some(avail)) => (avail, "(what the OS reports available; --memory-limit overrides it)"),
             (None, None) => (u64::MAX, "(unknown on this OS; pass --memory-limit)"),
         }
+    }
+
+    /// The most units of `bytes_per_unit` bytes each that [`Budget::check`] lets through now.
+    pub fn most_units(&self, bytes_per_unit: u64) -> u64 {
+        (self.allowance().0 as f64 / HEADROOM / bytes_per_unit.max(1) as f64) as u64
     }
 
     /// Refuses `needed` bytes of `what` when they pass the allowance.

@@ -5,6 +5,25 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+/// Most worker threads `--threads` takes: each is a real thread with its own stack, and a pool of
+/// 100,000 of them never finished building (issue 31).
+pub const MAX_THREADS: usize = 1024;
+/// Most repetitions `--reps` and `--warmup` take: every timed repetition keeps its sample.
+pub const MAX_REPS: u32 = 10_000;
+
+/// `--threads`: 1 to [`MAX_THREADS`].
+fn parse_threads(text: &str) -> Result<usize, String> {
+    let n: usize = text.parse().map_err(|e| format!("{e}"))?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match n {
+        0 => Err("at least 1 worker thread".into()),
+        n if n > MAX_THREADS => {
+            Err(format!("at most {MAX_THREADS} worker threads (this machine has {cores} logical cores)"))
+        }
+        n => Ok(n),
+    }
+}
+
 #[derive(Parser, Debug)]
 #[command(
     name = "harness",
@@ -188,14 +207,16 @@ pub struct RunArgs {
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
-    /// Worker threads for builds and renders (default: all logical cores; 1 for the ci preset).
-    #[arg(long)]
+    /// Worker threads for builds and renders (default: all logical cores; 1 for the ci preset;
+    /// at most 1024).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
-    /// Timed repetitions per build and per render (at least 5 for results that count).
-    #[arg(long)]
+    /// Timed repetitions per build and per render (at least 5 for results that count; at most
+    /// 10,000).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_REPS as i64))]
     pub reps: Option<u32>,
-    /// Untimed warm-up repetitions before the timed ones.
-    #[arg(long)]
+    /// Untimed warm-up repetitions before the timed ones (at most 10,000).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_REPS as i64))]
     pub warmup: Option<u32>,
     /// Animated scenes (kitchen-anim, robots-anim, fire-anim): how many frames, 0…N − 1, the
     /// animation has; svdag-temporal merges them all (default 16; the svdag-temporal preset 24).
@@ -283,8 +304,8 @@ pub struct RenderArgs {
     /// Where the PNGs go (default results/render-<time>/).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Worker threads (default: all logical cores).
-    #[arg(long)]
+    /// Worker threads (default: all logical cores; at most 1024).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Seed of the randomised workloads (AO directions).
     #[arg(long, default_value_t = 1)]

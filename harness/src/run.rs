@@ -230,6 +230,18 @@ impl Matrix<'_> {
                 }
             };
             let load_ms = ms_since(t);
+            if scene.dropped.total() > 0 {
+                let d = scene.dropped;
+                bar.suspend(|| {
+                    eprintln!(
+                        "  {scene_name}: dropped {} degenerate (zero-area) and {} duplicated triangles before any build; \
+                         {} remain",
+                        d.degenerate,
+                        d.duplicate,
+                        scene.triangle_count()
+                    )
+                });
+            }
             let mut ctx = SceneRun::new(&scene, load_ms, self.gpu);
             for (structure, params, variant) in matrix {
                 // One case's failure, a panic included, costs that case alone: it is listed with
@@ -244,7 +256,7 @@ impl Matrix<'_> {
                             structure,
                             variant: variant.clone(),
                             load_ms: ctx.load_ms,
-                            degenerate: ctx.degenerate,
+                            dropped: ctx.scene.dropped,
                         };
                         return shadows::measure(input, plan, bar, budget, compare);
                     }
@@ -299,7 +311,23 @@ fn load_scene_alone(name: &str, budget: &Budget) -> Result<Scene> {
         budget.check(format!("scene '{name}' ({triangles} × 4^{k} triangles)"), bytes, hint)?;
         return scenes::builtin::subdivided(base, name, k).with_context(|| format!("scene '{name}'"));
     }
-    scenes::load_scene(name).with_context(|| format!("scene '{name}'"))
+    // A scene file is weighed by its size before it is read, and read within what the budget
+    // allows (an `.obj.gz` can expand past any estimate: it is cut off there).
+    let path = std::path::Path::new(name);
+    if let Some(meta) = std::fs::metadata(path).ok().filter(|m| m.is_file() && scenes::load::is_scene_file(path)) {
+        let what = format!("reading scene file {name} ({})", budget::size(meta.len()));
+        budget.check(what, budget::scene_file_bytes(name, meta.len()), "a smaller scene or a larger --memory-limit")?;
+    }
+    let max_bytes = budget.most_units(budget::LOAD_BYTES_PER_OBJ_BYTE);
+    match scenes::builtin::load_scene_within(name, max_bytes) {
+        Err(scenes::SceneError::TooLarge { path, what, limit }) => {
+            // Refused like any other budget: the same message, listed as `budget`.
+            let needed = limit.saturating_add(1).saturating_mul(budget::LOAD_BYTES_PER_OBJ_BYTE);
+            budget.check(format!("loading {path}: {what}"), needed, hint)?;
+            bail!("{path}: {what} passes the {limit} bytes the memory budget allows")
+        }
+        loaded => loaded.with_context(|| format!("scene '{name}'")),
+    }
 }
 
 /// How a case that did not run is listed: `budget` (refused to fit), `unavailable` (needs what the
@@ -438,7 +466,6 @@ struct SceneRun<'a> {
     scene: &'a Scene,
     triangles: Arc<[Triangle]>,
     load_ms: f64,
-    degenerate: u64,
     /// The reference structure, once built: every other structure's renders are timed in
     /// alternation with its renders (paired timing, DESIGN.md §8).
     reference: Option<Box<dyn Accel>>,
@@ -450,15 +477,7 @@ struct SceneRun<'a> {
 
 impl<'a> SceneRun<'a> {
     fn new(scene: &'a Scene, load_ms: f64, gpu: Option<&'static GpuContext>) -> Self {
-        Self {
-            gpu,
-            scene,
-            triangles: scene.triangles(),
-            load_ms,
-            degenerate: scene.mesh.degenerate_count() as u64,
-            reference: None,
-            reference_frame: None,
-        }
+        Self { gpu, scene, triangles: scene.triangles(), load_ms, reference: None, reference_frame: None }
     }
 }
 
@@ -512,7 +531,8 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
         scene: scene.name.clone(),
         scene_provenance: scene.provenance.clone(),
         triangles: scene.triangle_count() as u64,
-        degenerate_triangles: ctx.degenerate,
+        degenerate_triangles: scene.dropped.degenerate,
+        duplicate_triangles: scene.dropped.duplicate,
         scene_load_ms: ctx.load_ms,
         structure: structure.into(),
         params: accel.params(),

@@ -36,12 +36,13 @@ pub struct ShadowCaseInput<'a> {
     pub structure: &'a str,
     pub variant: Option<String>,
     pub load_ms: f64,
-    pub degenerate: u64,
+    /// Triangles the scene dropped at load.
+    pub dropped: scenes::Dropped,
 }
 
 /// Builds and measures one `svdag-shadow` case.
 pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budget, compare: bool) -> Result<Case> {
-    let ShadowCaseInput { input, structure, variant, load_ms, degenerate } = c;
+    let ShadowCaseInput { input, structure, variant, load_ms, dropped } = c;
     let scene = input.scene;
     let params = input.params;
     let level = params.get("voxel.levels", 10u32)?;
@@ -64,7 +65,8 @@ pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budg
         scene: scene.name.clone(),
         scene_provenance: scene.provenance.clone(),
         triangles: scene.triangle_count() as u64,
-        degenerate_triangles: degenerate,
+        degenerate_triangles: dropped.degenerate,
+        duplicate_triangles: dropped.duplicate,
         scene_load_ms: load_ms,
         structure: structure.into(),
         params: dag.params(),

@@ -182,8 +182,10 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(out, "## {}\n", first.scene);
     let _ = writeln!(
         out,
-        "{} triangles ({} degenerate), loaded in {:.0} ms. Source: {}\n",
-        first.triangles, first.degenerate_triangles, first.scene_load_ms, first.scene_provenance
+        "{}, loaded in {:.0} ms. Source: {}\n",
+        first.triangle_summary(),
+        first.scene_load_ms,
+        first.scene_provenance
     );
     let _ = writeln!(
         out,

@@ -181,8 +181,13 @@ pub struct Settings {
 pub struct Case {
     pub scene: String,
     pub scene_provenance: String,
+    /// Triangles the structures were built from, after the scene dropped its degenerate and
+    /// duplicated ones (counted beside it).
     pub triangles: u64,
     pub degenerate_triangles: u64,
+    /// Triangles dropped as duplicates of another (the same corners); absent in older results.
+    #[serde(default)]
+    pub duplicate_triangles: u64,
     pub scene_load_ms: f64,
     pub structure: String,
     /// The structure's parameters, resolved (defaults included).
@@ -270,6 +275,18 @@ pub struct SkippedRender {
 }
 
 impl Case {
+    /// "3674 triangles", with what the scene dropped at load where it dropped any.
+    pub fn triangle_summary(&self) -> String {
+        let mut text = format!("{} triangles", self.triangles);
+        if self.degenerate_triangles + self.duplicate_triangles > 0 {
+            text += &format!(
+                " ({} degenerate and {} duplicated ones dropped at load)",
+                self.degenerate_triangles, self.duplicate_triangles
+            );
+        }
+        text
+    }
+
     /// How tables and plots name the case: the structure with its variant, tagged with its
     /// machine when merged.
     pub fn label(&self) -> String {

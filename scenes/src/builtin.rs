@@ -60,11 +60,37 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
 /// scene's frame (`kitchen-anim` is frame 0 of [`DEFAULT_FRAMES`], `kitchen-anim@f<t>` frame t), or
 /// a path to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
 /// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
+///
+/// A static scene's degenerate and duplicated triangles are dropped ([`Scene::dropped`] counts
+/// them); a scene left with none is an error. An animation keeps its triangles: its frames share
+/// one topology (the animated scenes have none to drop).
 pub fn load_scene(name: &str) -> Result<Scene, SceneError> {
+    load_scene_within(name, u64::MAX)
+}
+
+/// [`load_scene`], reading at most `max_bytes` of a scene file (and of an `.obj.gz`'s text):
+/// see [`load::load_file_within`].
+pub fn load_scene_within(name: &str, max_bytes: u64) -> Result<Scene, SceneError> {
     if let Some((base, levels)) = subdivision(name) {
-        return subdivided(load_scene(base)?, name, levels);
+        return subdivided(load_scene_within(base, max_bytes)?, name, levels);
     }
-    load_unmodified(name)
+    let mut scene = load_unmodified(name, max_bytes)?;
+    if scene.animation.is_none() {
+        let dropped = scene.drop_unusable_triangles();
+        if scene.triangle_count() == 0 {
+            return Err(SceneError::Empty {
+                path: name.into(),
+                detail: format!(
+                    "all of its {} triangles are degenerate ({}, zero area) or duplicates of another ({}): \
+                     nothing to trace",
+                    dropped.total(),
+                    dropped.degenerate,
+                    dropped.duplicate
+                ),
+            });
+        }
+    }
+    Ok(scene)
 }
 
 /// `scene` subdivided `levels` times (4^levels triangles each), renamed `name`; an error when the
@@ -136,7 +162,7 @@ fn animation_frame(name: &str) -> Option<Result<Scene, SceneError>> {
     Some(Ok(frame))
 }
 
-fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
+fn load_unmodified(name: &str, max_bytes: u64) -> Result<Scene, SceneError> {
     if let Some(scene) = shipped_asset(name) {
         return scene;
     }
@@ -162,7 +188,7 @@ fn load_unmodified(name: &str) -> Result<Scene, SceneError> {
         "city" => Ok(procedural::city(seed)),
         "flat" => Ok(procedural::flat(seed)),
         "room" => Ok(procedural::room(seed)),
-        _ if load::is_scene_file(Path::new(name)) => load::load_file(Path::new(name)),
+        _ if load::is_scene_file(Path::new(name)) => load::load_file_within(Path::new(name), max_bytes),
         _ => Err(SceneError::UnknownScene {
             name: name.into(),
             detail: format!(

@@ -58,6 +58,12 @@ pub enum SceneError {
     /// A valid file using a feature we do not load (e.g. a glTF primitive mode other than triangles).
     #[error("{path}: {location}: unsupported: {detail}")]
     Unsupported { path: String, location: Location, detail: String },
+    /// A path that is not a regular file: a device, pipe or socket could be read without end.
+    #[error("{path}: not a regular file but {kind}: scene files are read whole, so only regular files are loaded")]
+    NotAFile { path: String, kind: &'static str },
+    /// More bytes than the load may hold (the file, or an `.obj.gz` stream as it decompresses).
+    #[error("{path}: {what} passes the {limit} bytes this load may read")]
+    TooLarge { path: String, what: String, limit: u64 },
     /// A scene name that is neither built in nor a file with a known extension.
     #[error("unknown scene '{name}': {detail}")]
     UnknownScene { name: String, detail: String },

@@ -21,5 +21,5 @@ pub use builtin::{BUILTIN_SCENES, load_scene};
 pub use camera::{Camera, CameraSpec};
 pub use error::{Location, SceneError};
 pub use geom::{Aabb, Ray};
-pub use mesh::Mesh;
+pub use mesh::{Dropped, Mesh};
 pub use scene::{Object, Scene, Triangle};

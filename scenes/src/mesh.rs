@@ -1,14 +1,33 @@
 //! An indexed triangle mesh (DESIGN.md §3).
 
-use glam::{Mat4, Vec3};
+use foldhash::fast::FixedState;
+use glam::{DVec3, Mat4, Vec3};
+use hashbrown::HashSet;
 
 use crate::error::{Location, SceneError};
 use crate::geom::Aabb;
 
+/// Triangles dropped from a scene before any build ([`Mesh::drop_unusable`]), reported in the
+/// results and the log.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Dropped {
+    /// Zero area ([`Mesh::is_degenerate`]).
+    pub degenerate: u64,
+    /// The same corners as an earlier triangle: a duplicated face.
+    pub duplicate: u64,
+}
+
+impl Dropped {
+    pub fn total(&self) -> u64 {
+        self.degenerate + self.duplicate
+    }
+}
+
 /// Positions, triangle indices and optional per-vertex normals and colours.
 ///
-/// Degenerate triangles (zero area, or repeated indices) are kept: structures must cope with
-/// them, and [`Mesh::degenerate_count`] reports how many there are.
+/// A mesh keeps what its file holds, degenerate and duplicated triangles included
+/// ([`Mesh::degenerate_count`]); a scene drops them before anything is built from it
+/// ([`Mesh::drop_unusable`], called by [`crate::load_scene`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     pub name: String,
@@ -40,14 +59,47 @@ impl Mesh {
         Aabb::from_points(self.indices.iter().flatten().map(|&i| self.positions[i as usize]))
     }
 
-    /// Triangles with zero area (including repeated indices). They are kept, never hit.
+    /// Triangles with zero area ([`Mesh::is_degenerate`]).
     pub fn degenerate_count(&self) -> usize {
-        (0..self.indices.len())
-            .filter(|&i| {
-                let [a, b, c] = self.triangle(i);
-                (b - a).cross(c - a) == Vec3::ZERO
+        (0..self.indices.len()).filter(|&i| self.is_degenerate(i)).count()
+    }
+
+    /// True when triangle `i` has zero area in double precision: a repeated index, or corners
+    /// that coincide or lie on one line. (A sliver whose area underflows single precision, a
+    /// 10⁻³⁰-sized triangle, is not degenerate: it is kept, and the structures cope with it.)
+    pub fn is_degenerate(&self, i: usize) -> bool {
+        let [a, b, c] = self.triangle(i).map(|p| p.as_dvec3());
+        (b - a).cross(c - a) == DVec3::ZERO
+    }
+
+    /// Drops degenerate triangles and duplicated faces (the same three corners as an earlier
+    /// triangle, in any order or winding; the earlier one is kept): neither can change what a ray
+    /// hits, yet every structure would pay for them (issue 31: 200,000 copies of one face made
+    /// the reference BVH quadratic). Returns what was dropped and, per original triangle, whether
+    /// it was kept. Vertices are left as they are.
+    pub fn drop_unusable(&mut self) -> (Dropped, Vec<bool>) {
+        let mut dropped = Dropped::default();
+        let mut seen: HashSet<[[u32; 3]; 3], FixedState> =
+            HashSet::with_capacity_and_hasher(self.indices.len(), FixedState::default());
+        let keep: Vec<bool> = (0..self.indices.len())
+            .map(|i| {
+                if self.is_degenerate(i) {
+                    dropped.degenerate += 1;
+                    return false;
+                }
+                // Corners as bits, sorted: any order and either winding give one key.
+                let mut key = self.triangle(i).map(|p| p.to_array().map(f32::to_bits));
+                key.sort_unstable();
+                let new = seen.insert(key);
+                dropped.duplicate += u64::from(!new);
+                new
             })
-            .count()
+            .collect();
+        if dropped.total() > 0 {
+            let mut kept = keep.iter();
+            self.indices.retain(|_| *kept.next().expect("one flag per triangle"));
+        }
+        (dropped, keep)
     }
 
     /// Adds a vertex and returns its index.

@@ -8,7 +8,7 @@ use glam::Vec3;
 use crate::anim::Animation;
 use crate::camera::CameraSpec;
 use crate::geom::Aabb;
-use crate::mesh::Mesh;
+use crate::mesh::{Dropped, Mesh};
 
 /// A triangle as its three corners: the geometry buffer every triangle structure's kernel reads
 /// (shared, built once per scene, not counted in any structure's memory).
@@ -42,6 +42,8 @@ pub struct Scene {
     /// positions move, so the temporal SVDAG can voxelise all frames into one grid (DESIGN.md §6).
     /// Anything that changes the triangles (`@sub<k>`) drops it.
     pub animation: Option<Animation>,
+    /// Triangles dropped when the scene was loaded ([`Scene::drop_unusable_triangles`]).
+    pub dropped: Dropped,
 }
 
 impl Scene {
@@ -61,6 +63,7 @@ impl Scene {
             camera: None,
             light: None,
             animation: None,
+            dropped: Dropped::default(),
         }
     }
 
@@ -83,6 +86,28 @@ impl Scene {
             let b = self.bounds().framed();
             b.center() + b.diagonal() * Vec3::new(-0.4, 1.0, 0.6)
         })
+    }
+
+    /// Drops the mesh's degenerate and duplicated triangles ([`Mesh::drop_unusable`]) and
+    /// narrows the objects' triangle ranges to what is left; adds them to [`Scene::dropped`].
+    pub fn drop_unusable_triangles(&mut self) -> Dropped {
+        let (dropped, keep) = self.mesh.drop_unusable();
+        if dropped.total() > 0 {
+            // kept_before[t]: triangle t's index once the dropped ones before it are gone.
+            let kept_before: Vec<u32> = std::iter::once(0)
+                .chain(keep.iter().scan(0u32, |n, &k| {
+                    *n += u32::from(k);
+                    Some(*n)
+                }))
+                .collect();
+            for o in &mut self.objects {
+                let (first, end) = (o.first_triangle as usize, (o.first_triangle + o.triangle_count) as usize);
+                (o.first_triangle, o.triangle_count) = (kept_before[first], kept_before[end] - kept_before[first]);
+            }
+        }
+        self.dropped.degenerate += dropped.degenerate;
+        self.dropped.duplicate += dropped.duplicate;
+        dropped
     }
 
     /// The triangle soup every triangle structure's kernel reads (see [`Triangle`]).

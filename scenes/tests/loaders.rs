@@ -2,6 +2,7 @@
 //! gets its specific error naming the file and the line (OBJ) or element (glTF).
 
 use std::io::Write;
+use std::path::Path;
 
 use glam::{Mat4, Quat, Vec3};
 use scenes::load::gltf::parse_gltf;
@@ -83,6 +84,77 @@ fn degenerate_triangles_are_kept_and_counted() {
     assert_eq!((mesh.triangle_count(), mesh.degenerate_count()), (3, 2));
 }
 
+/// What a scene drops before any build: zero-area triangles (in double precision: a triangle
+/// 1e-30 across is kept) and later copies of a face in any corner order or winding; objects'
+/// ranges shrink with them.
+#[test]
+fn a_scene_drops_degenerate_and_duplicated_triangles() {
+    let text = format!(
+        "{SQUARE}v 2 0 0\nv 0 0 1e-30\nv 1e-30 0 0\n\
+         f 1 2 3\nf 1 2 2\nf 3 2 1\nf 1 2 5\nf 2 3 1\nf 1 6 7\nf 1 3 4\nf 1 3 4\n"
+    );
+    let mut scene = scenes::load::load_bytes("d.obj", text.as_bytes()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.triangle_count(), 8);
+    let dropped = scene.drop_unusable_triangles();
+    assert_eq!((dropped.degenerate, dropped.duplicate), (2, 3));
+    let corners: Vec<[Vec3; 3]> = (0..3).map(|i| scene.mesh.triangle(i)).collect();
+    let (o, x, xy, y) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y);
+    assert_eq!(corners, vec![[o, x, xy], [o, Vec3::new(0.0, 0.0, 1e-30), Vec3::new(1e-30, 0.0, 0.0)], [o, xy, y]]);
+    assert_eq!((scene.objects[0].first_triangle, scene.objects[0].triangle_count), (0, 3));
+    assert_eq!(scene.dropped, dropped);
+}
+
+/// Through `load_scene`, a file of nothing but zero-area faces is an error saying so.
+#[test]
+fn a_scene_of_only_degenerate_triangles_is_an_error() {
+    let dir = std::env::temp_dir().join(format!("accel-bench-degenerate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("flat.obj");
+    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n").expect("write");
+    let err = scenes::load_scene(&path.to_string_lossy()).map(|_| ()).expect_err("nothing to trace").to_string();
+    assert!(err.contains("flat.obj") && err.contains("all of its 2 triangles are degenerate"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A line longer than an OBJ line may be is an error at its line, before tobj holds it.
+#[test]
+fn an_overlong_line_is_an_error_at_its_number() {
+    let long = "#".repeat(scenes::load::obj::MAX_LINE_BYTES + 1);
+    match parse_obj("long.obj", format!("{SQUARE}{long}\nf 1 2 3\n").as_bytes()) {
+        Err(SceneError::Malformed { location: Location::Line(5), detail, .. }) => {
+            assert!(detail.contains("an OBJ line may have at most"), "{detail}")
+        }
+        other => panic!("expected a malformed line 5, got {other:?}"),
+    }
+    let fine = "#".repeat(scenes::load::obj::MAX_LINE_BYTES);
+    assert!(parse_obj("fine.obj", format!("{SQUARE}{fine}\nf 1 2 3\n").as_bytes()).is_ok());
+}
+
+/// Reads are bounded: a file larger than the load may read, and a gzip stream that decompresses
+/// past it, are refused with how far they got.
+#[test]
+fn reads_stop_at_their_limit() {
+    let text = format!("{SQUARE}f 1 2 3\n");
+    let packed = {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        gz.write_all(text.as_bytes()).expect("compress");
+        gz.finish().expect("compress")
+    };
+    let err = scenes::load::load_bytes_within("t.obj.gz", &packed, 10).map(|_| ()).expect_err("cut off");
+    assert!(matches!(err, SceneError::TooLarge { limit: 10, .. }), "{err}");
+    assert!(scenes::load::load_bytes_within("t.obj.gz", &packed, text.len() as u64).is_ok());
+    let dir = std::env::temp_dir().join(format!("accel-bench-limit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("t.obj");
+    std::fs::write(&path, &text).expect("write");
+    let err = scenes::load::load_file_within(&path, 10).map(|_| ()).expect_err("too large");
+    assert!(err.to_string().contains(&format!("the file's {} bytes", text.len())), "{err}");
+    assert!(scenes::load::load_file_within(&path, text.len() as u64).is_ok());
+    let err = scenes::load::load_file(Path::new("/dev/null")).map(|_| ()).expect_err("a device");
+    assert!(matches!(err, SceneError::NotAFile { kind: "a device", .. }), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn line_elements_are_ignored_and_a_final_newline_is_optional() {
     let mesh = obj(&format!("{SQUARE}l 1 2\nl 1 2 3 4\nf 1 2 3"));
@@ -106,7 +178,10 @@ fn full_dragon_loads_quickly() {
     let scene = scenes::load_scene("dragon").unwrap_or_else(|e| panic!("{e}"));
     let elapsed = start.elapsed();
     eprintln!("dragon: {} triangles loaded in {elapsed:.2?}", scene.triangle_count());
-    assert_eq!((scene.triangle_count(), scene.mesh.positions.len()), (871_414, 437_645));
+    // The file's header counts: 871,414 faces, less the zero-area ones the scene drops.
+    let dropped = scene.dropped;
+    assert_eq!((scene.triangle_count() as u64 + dropped.total(), scene.mesh.positions.len()), (871_414, 437_645));
+    assert_eq!(scene.mesh.degenerate_count(), 0);
     // The target is < 2 s; the bound is loose because tests share the machine.
     assert!(elapsed.as_secs_f64() < 8.0, "{elapsed:?}");
 }

@@ -426,9 +426,8 @@ fn scene_section(out: &mut String, cases: &[&Case], images: &Shots, prefix: &str
     let _ = writeln!(out, "<section id=\"{prefix}{}\"><h2>{}</h2>", anchor("scene", &first.scene), esc(&first.scene));
     let _ = writeln!(
         out,
-        "<p>{} triangles ({} degenerate), loaded in {:.0} ms. Source: {}</p>",
-        first.triangles,
-        first.degenerate_triangles,
+        "<p>{}, loaded in {:.0} ms. Source: {}</p>",
+        esc(&first.triangle_summary()),
         first.scene_load_ms,
         esc(&first.scene_provenance)
     );

@@ -20,6 +20,7 @@
 //! Sparse accessors are rejected as Unsupported; a node reached twice (a cycle, or two
 //! parents, which glTF forbids) is Malformed.
 
+use std::io::Read;
 use std::path::Path;
 
 use glam::{Mat4, Vec3};
@@ -163,7 +164,7 @@ fn load_buffers(
             gltf::buffer::Source::Bin => {
                 blob.take().ok_or_else(|| malformed(path, &element, "refers to a GLB binary chunk the file lacks"))?
             }
-            gltf::buffer::Source::Uri(uri) => read_uri(path, &element, uri, base_dir)?,
+            gltf::buffer::Source::Uri(uri) => read_uri(path, &element, uri, base_dir, buffer.length() as u64)?,
         };
         if data.len() < buffer.length() {
             let detail = format!("holds {} bytes, but its byteLength is {}", data.len(), buffer.length());
@@ -174,7 +175,9 @@ fn load_buffers(
     Ok(buffers)
 }
 
-fn read_uri(path: &str, element: &str, uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, SceneError> {
+/// A buffer's bytes from its URI; an external file is read only if it is a regular file, and only
+/// its first `length` bytes (the buffer's byteLength) are kept.
+fn read_uri(path: &str, element: &str, uri: &str, base_dir: Option<&Path>, length: u64) -> Result<Vec<u8>, SceneError> {
     let unsupported = |detail: String| SceneError::Unsupported {
         path: path.into(),
         location: Location::Element(element.into()),
@@ -213,7 +216,14 @@ fn read_uri(path: &str, element: &str, uri: &str, base_dir: Option<&Path>) -> Re
             real_dir.display()
         )));
     }
-    std::fs::read(&real_file).map_err(io)
+    let display = format!("{} ({element} of {path})", full.display());
+    let meta = std::fs::metadata(&real_file).map_err(io)?;
+    if !meta.is_file() {
+        return Err(SceneError::NotAFile { path: display, kind: super::file_kind(&meta) });
+    }
+    let mut bytes = Vec::with_capacity(meta.len().min(length) as usize);
+    std::fs::File::open(&real_file).and_then(|f| f.take(length).read_to_end(&mut bytes)).map_err(io)?;
+    Ok(bytes)
 }
 
 /// Standard base64, padding optional. `None` on a character outside the alphabet.

@@ -24,7 +24,8 @@
 //! * **Attributes.** Normals are kept only if every vertex has exactly one (per-corner normals
 //!   that differ for one position are dropped, not averaged); vertex colours (`v x y z r g b`)
 //!   only if every vertex has one. Texture coordinates and materials are ignored.
-//! * Degenerate triangles are kept.
+//! * Degenerate triangles are kept (a scene drops them, and duplicated faces: [`crate::load_scene`]).
+//! * A line longer than [`MAX_LINE_BYTES`] is an error at its line, found before tobj reads it.
 
 use std::io::{ErrorKind, Read};
 use std::str::SplitWhitespace;
@@ -38,6 +39,12 @@ use crate::mesh::Mesh;
 /// Decompresses a gzipped OBJ. A stream that ends early is Truncated, located at the first line
 /// not completely decoded; data that is not gzip at all (a plain OBJ named `.obj.gz`) is Malformed.
 pub fn gunzip(path: &str, bytes: &[u8]) -> Result<Vec<u8>, SceneError> {
+    gunzip_within(path, bytes, u64::MAX)
+}
+
+/// [`gunzip`], stopping with [`SceneError::TooLarge`] once the text passes `max_bytes` (a gzip
+/// stream can expand a thousandfold).
+pub fn gunzip_within(path: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<u8>, SceneError> {
     if !bytes.starts_with(&[0x1f, 0x8b]) {
         return Err(SceneError::Malformed {
             path: path.into(),
@@ -45,9 +52,14 @@ pub fn gunzip(path: &str, bytes: &[u8]) -> Result<Vec<u8>, SceneError> {
             detail: "not gzip data (it does not start with the gzip magic bytes 1f 8b)".into(),
         });
     }
-    let mut text = Vec::with_capacity(bytes.len().saturating_mul(4));
+    let mut text = Vec::with_capacity(bytes.len().saturating_mul(4).min(max_bytes as usize));
     // `read_to_end` keeps what was decoded before an error, which locates the cut.
-    let Err(err) = MultiGzDecoder::new(bytes).read_to_end(&mut text) else {
+    let decoded = MultiGzDecoder::new(bytes).take(max_bytes.saturating_add(1)).read_to_end(&mut text);
+    if text.len() as u64 > max_bytes {
+        let what = format!("its text, decompressed from {} bytes,", bytes.len());
+        return Err(SceneError::TooLarge { path: path.into(), what, limit: max_bytes });
+    }
+    let Err(err) = decoded else {
         return Ok(text);
     };
     let (path, location, decoded) = (path.to_string(), Location::Line(line_count(&text) + 1), text.len());
@@ -79,6 +91,9 @@ pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
     // panics wherever overflow checks are on (found by the `obj` fuzz target; the input is in
     // tests/fuzz/regressions/obj). Our own line checker names what is wrong with such a file, so
     // a panic inside tobj is diagnosed like any error it returns.
+    // One pass over the lines before tobj reads them: an over-long line is an error here (tobj
+    // would hold all of it), and whether there are `l` records at all is noted on the way.
+    let has_lines = scan_lines(path, bytes)?;
     let loaded = std::panic::catch_unwind(|| tobj::load_obj_buf(&mut &bytes[..], &options, no_materials));
     let models = match loaded {
         Ok(Ok((models, _materials))) => models,
@@ -87,7 +102,7 @@ pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
     };
     // tobj reads `l` records exactly like `f` records (`l 1 2 3` becomes a triangle). Whether
     // there are any is one quick pass over the bytes; only if so do we note which elements they are.
-    let is_line = has_line_records(bytes).then(|| element_is_line(bytes));
+    let is_line = has_lines.then(|| element_is_line(bytes));
     let mut elements = Elements { is_line: is_line.as_deref(), next: 0, short: 0 };
     let mut mesh = Mesh::new(file_stem(path), provenance(path, bytes));
     for model in &models {
@@ -223,8 +238,25 @@ fn keyword(line: &[u8]) -> &[u8] {
     std::str::from_utf8(line).ok().and_then(|l| l.split_whitespace().next()).map_or(word, str::as_bytes)
 }
 
-fn has_line_records(bytes: &[u8]) -> bool {
-    bytes.split(|&b| b == b'\n').any(|line| keyword(line) == b"l")
+/// Most bytes an OBJ line may have (a vertex or face record is a few dozen; a million-corner
+/// polygon would be about 8 MiB, and is refused).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Checks every line's length against [`MAX_LINE_BYTES`] (an error at the first longer one) and
+/// says whether the file has `l` (polyline) records.
+fn scan_lines(path: &str, bytes: &[u8]) -> Result<bool, SceneError> {
+    let mut has_lines = false;
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if line.len() > MAX_LINE_BYTES {
+            return Err(SceneError::Malformed {
+                path: path.into(),
+                location: Location::Line(n + 1),
+                detail: format!("a line of {} bytes; an OBJ line may have at most {MAX_LINE_BYTES}", line.len()),
+            });
+        }
+        has_lines |= keyword(line) == b"l";
+    }
+    Ok(has_lines)
 }
 
 /// For each `f` or `l` record in file order, whether it is an `l`.

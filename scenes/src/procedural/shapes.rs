@@ -52,7 +52,16 @@ impl SceneBuilder {
         let mut mesh = self.mesh;
         mesh.name = name.to_string();
         mesh.provenance = provenance.clone();
-        Scene { name: name.to_string(), provenance, mesh, objects: self.objects, camera, light, animation: None }
+        Scene {
+            name: name.to_string(),
+            provenance,
+            mesh,
+            objects: self.objects,
+            camera,
+            light,
+            animation: None,
+            dropped: Default::default(),
+        }
     }
 }
 
