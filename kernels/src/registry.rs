@@ -96,6 +96,16 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
     StructureEntry {
+        name: "kdtree",
+        family: "triangle",
+        summary: "SAH kd-tree (Wald & Havran 2006): O(N log N) event sweep, perfect splits, 8-byte nodes, \
+                  front-to-back stack traversal",
+        params: &structures::kdtree::KdParams::KEYS,
+        check: |p| structures::kdtree::KdParams::from_params(p).map(drop),
+        build: |input| Ok(Box::new(structures::kdtree::KdTree::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
         name: "org",
         family: "triangle",
         summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8, org.leaf_lambda = org.lambda, org.beta level|counted, org.gamma_test reduced|unreduced, org.cell_test bbox|sat)",

@@ -27,6 +27,7 @@ pub mod embree;
 pub mod esvo;
 pub mod grid;
 pub(crate) mod intern;
+pub mod kdtree;
 pub mod memory;
 pub mod obvhs;
 pub mod params;

@@ -7,6 +7,7 @@ pub mod bvh;
 pub mod embree;
 pub mod esvo;
 pub mod grid;
+pub mod kdtree;
 pub mod obvhs;
 pub mod octree_cast;
 pub mod octree_ray;

@@ -19,6 +19,20 @@ pub fn reciprocal(dir: Vec3) -> [f32; 3] {
 /// `[min, max]` within `(t_min, t_max)`, if it enters.
 #[inline(always)]
 pub fn entry(origin: &[f32; 3], inv: &[f32; 3], min: &[f32; 3], max: &[f32; 3], t_min: f32, t_max: f32) -> Option<f32> {
+    interval(origin, inv, min, max, t_min, t_max).map(|(t0, _)| t0)
+}
+
+/// The span `(entry, exit)` of the ray within the box and `(t_min, t_max)`, if it enters; the
+/// exit is widened as [`ROBUST_FAR`] says.
+#[inline(always)]
+pub fn interval(
+    origin: &[f32; 3],
+    inv: &[f32; 3],
+    min: &[f32; 3],
+    max: &[f32; 3],
+    t_min: f32,
+    t_max: f32,
+) -> Option<(f32, f32)> {
     let (mut t0, mut t1) = (t_min, t_max);
     for a in 0..3 {
         let (near, far) = if inv[a] < 0.0 { (max[a], min[a]) } else { (min[a], max[a]) };
@@ -32,7 +46,7 @@ pub fn entry(origin: &[f32; 3], inv: &[f32; 3], min: &[f32; 3], max: &[f32; 3], 
             t1 = tf;
         }
     }
-    (t0 <= t1).then_some(t0)
+    (t0 <= t1).then_some((t0, t1))
 }
 
 #[cfg(test)]

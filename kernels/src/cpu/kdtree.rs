@@ -1,0 +1,110 @@
+//! CPU kernel of the kd-tree: front-to-back traversal with a stack of far children and their ray
+//! intervals — Havran's recursive algorithm TA_B^rec in iterative form, as in Wald's thesis
+//! (§7.2): descend towards the origin's side, push the far child when the ray reaches the plane
+//! within the node's interval, test a leaf's triangles, and pop only far children the ray enters
+//! before the nearest hit so far (the stack's top is the nearest: the walk ends soon after a hit).
+//!
+//! Exactness: the hit equals brute force's on the shared watertight test. The plane distances are
+//! rounded, so each interval end is widened by [`MARGIN`] (a plane within rounding of an end opens
+//! both children); a ray lying in a split plane walks both sides; a triangle is listed in every
+//! leaf its clipped box meets, so the nearest hit's point is in a visited leaf.
+
+use scenes::Ray;
+use structures::kdtree::{KdTree, MAX_DEPTH};
+
+use super::slab;
+use super::triangle::{ShearedRay, geometric_normal};
+use crate::{Counters, Hit, NoStats, Stats, Traverse};
+
+/// Relative widening of every interval end (2⁻¹³, as the BVH's cull margin).
+const MARGIN: f32 = 1.0 / 8192.0;
+
+fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    let origin = ray.origin.to_array();
+    let dir = ray.dir.to_array();
+    let inv = slab::reciprocal(ray.dir);
+    let (lo, hi) = (tree.bounds.0.to_array(), tree.bounds.1.to_array());
+    let (mut t_near, mut t_far) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max)?;
+    let sheared = ShearedRay::new(ray);
+    let (mut best_t, mut best_prim) = (t_max, u32::MAX);
+    let mut stack = [(0u32, 0f32, 0f32); MAX_DEPTH as usize + 1];
+    let mut sp = 0usize;
+    let mut node = 0usize;
+    'traverse: loop {
+        // DESCEND to a leaf.
+        loop {
+            stats.step();
+            stats.visit();
+            let n = &tree.nodes[node];
+            if n.is_leaf() {
+                break;
+            }
+            let (axis, split, first) = (n.axis(), n.split(), n.first_child());
+            let o = origin[axis];
+            // The near child is the origin's side; on the plane, the side the ray heads into.
+            let below_first = o < split || (o == split && dir[axis] <= 0.0);
+            let (near, far) = if below_first { (first, first + 1) } else { (first + 1, first) };
+            if dir[axis] == 0.0 {
+                // Parallel to the plane: the origin's side only, or both when in the plane.
+                if o == split {
+                    stack[sp] = (far as u32, t_near, t_far);
+                    sp += 1;
+                    stats.push();
+                }
+                node = near;
+                continue;
+            }
+            let t_split = (split - o) * inv[axis];
+            if t_split <= 0.0 || t_split > t_far * (1.0 + MARGIN) {
+                node = near; // the plane is behind the origin or beyond the interval
+            } else if t_split < t_near * (1.0 - MARGIN) {
+                node = far; // the ray is past the plane already
+            } else {
+                stack[sp] = (far as u32, t_split * (1.0 - MARGIN), t_far);
+                sp += 1;
+                stats.push();
+                node = near;
+                t_far = t_split * (1.0 + MARGIN);
+            }
+        }
+        // LEAF: its triangles, nearest hit kept.
+        let leaf = &tree.nodes[node];
+        for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
+            stats.prim_test();
+            if let Some(t) = sheared.intersect(&tree.triangles[r as usize], t_min, best_t) {
+                best_t = t;
+                best_prim = r;
+            }
+        }
+        // POP the next far child the ray reaches before the best hit. (No early exit on a hit
+        // inside this cell: a ray in a split plane pushed its far child with this very interval,
+        // and a hit within the margin of the plane may yet be beaten across it.)
+        loop {
+            if sp == 0 {
+                break 'traverse;
+            }
+            sp -= 1;
+            stats.pop();
+            let (next, a, b) = stack[sp];
+            if a <= best_t {
+                (node, t_near, t_far) = (next as usize, a, b);
+                continue 'traverse;
+            }
+        }
+    }
+    (best_prim != u32::MAX).then(|| Hit {
+        t: best_t,
+        normal: geometric_normal(&tree.triangles[best_prim as usize]),
+        prim: u64::from(best_prim),
+    })
+}
+
+impl Traverse for KdTree {
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, &mut NoStats)
+    }
+
+    fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
+        trace(self, ray, t_min, t_max, counters)
+    }
+}

@@ -1,0 +1,59 @@
+//! Structural checks of a kd-tree, used by the builder (debug) and the tests.
+
+use glam::Vec3;
+
+use super::{KdTree, MAX_DEPTH};
+
+impl KdTree {
+    /// Checks that every inner node's children follow it and its plane lies strictly inside its
+    /// cell, that every reference is in range and its triangle's box meets its leaf's cell, that
+    /// every triangle is referenced somewhere, every node is reachable and the depth is bounded.
+    pub fn validate(&self) -> Result<(), String> {
+        let mut referenced = vec![false; self.triangles.len()];
+        let mut visited = 0usize;
+        let mut pending = vec![(0usize, self.bounds, 1usize)];
+        while let Some((i, (lo, hi), depth)) = pending.pop() {
+            visited += 1;
+            if depth > MAX_DEPTH as usize + 1 {
+                return Err(format!("node {i} at depth {depth}, past {MAX_DEPTH}"));
+            }
+            let n = self.nodes.get(i).ok_or_else(|| format!("node index {i} out of range"))?;
+            if n.is_leaf() {
+                let range = n.first_ref()..n.first_ref() + n.count();
+                let refs = self.refs.get(range).ok_or_else(|| format!("leaf {i}: references out of range"))?;
+                for &r in refs {
+                    let tri =
+                        self.triangles.get(r as usize).ok_or_else(|| format!("leaf {i}: triangle {r} out of range"))?;
+                    let (tlo, thi) = (tri[0].min(tri[1]).min(tri[2]), tri[0].max(tri[1]).max(tri[2]));
+                    if !(tlo.cmple(hi).all() && thi.cmpge(lo).all()) {
+                        return Err(format!("leaf {i}: triangle {r} lies outside its cell"));
+                    }
+                    referenced[r as usize] = true;
+                }
+                continue;
+            }
+            let (axis, split, first) = (n.axis(), n.split(), n.first_child());
+            if first <= i || first + 1 >= self.nodes.len() {
+                return Err(format!("node {i}: children at {first} do not follow it or are out of range"));
+            }
+            if !(split > lo[axis] && split < hi[axis]) {
+                return Err(format!(
+                    "node {i}: plane {split} on axis {axis} outside its cell {}…{}",
+                    lo[axis], hi[axis]
+                ));
+            }
+            let (mut below_hi, mut above_lo): (Vec3, Vec3) = (hi, lo);
+            below_hi[axis] = split;
+            above_lo[axis] = split;
+            pending.push((first, (lo, below_hi), depth + 1));
+            pending.push((first + 1, (above_lo, hi), depth + 1));
+        }
+        if visited != self.nodes.len() {
+            return Err(format!("{} nodes stored, {visited} reachable", self.nodes.len()));
+        }
+        match referenced.iter().position(|&r| !r) {
+            Some(t) => Err(format!("triangle {t} is in no leaf")),
+            None => Ok(()),
+        }
+    }
+}
