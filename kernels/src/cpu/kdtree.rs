@@ -1,4 +1,4 @@
-//! CPU kernel of the kd-tree: front-to-back traversal with a stack of far children and their ray
+//! CPU kernel of the kd-tree (WGSL twin: `gpu/kdtree.wgsl`): front-to-back traversal with a stack of far children and their ray
 //! intervals — Havran's recursive algorithm TA_B^rec in iterative form, as in Wald's thesis
 //! (§7.2): descend towards the origin's side, push the far child when the ray reaches the plane
 //! within the node's interval, test a leaf's triangles, and pop only far children the ray enters
@@ -9,11 +9,12 @@
 //! both children); a ray lying in a split plane walks both sides; a triangle is listed in every
 //! leaf its clipped box meets, so the nearest hit's point is in a visited leaf.
 
-use scenes::Ray;
+use scenes::{Camera, Ray};
 use structures::kdtree::{KdTree, MAX_DEPTH};
 
 use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
+use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// Relative widening of every interval end (2⁻¹³, as the BVH's cull margin).
@@ -106,5 +107,9 @@ impl Traverse for KdTree {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
+        Some(crate::gpu::kdtree::program(self))
     }
 }

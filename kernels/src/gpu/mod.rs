@@ -23,6 +23,7 @@ pub(crate) mod bvh;
 pub(crate) mod cwbvh;
 pub mod dispatch;
 pub(crate) mod grid;
+pub(crate) mod kdtree;
 pub mod program;
 pub mod rays;
 pub mod render;

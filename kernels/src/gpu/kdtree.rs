@@ -1,0 +1,40 @@
+//! The kd-tree's GPU program: `kdtree.wgsl` over the structure's own nodes and refs, its root
+//! cell, and the triangle soup the watertight test reads (CPU twin: `cpu::kdtree`).
+
+use std::borrow::Cow;
+
+use structures::kdtree::KdTree;
+
+use super::{GpuBuffer, GpuProgram};
+
+pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("triangle.wgsl"), include_str!("kdtree.wgsl"));
+
+/// The program of `kdtree`: its [`structures::kdtree::KdNode`] words, refs, bounds and triangles.
+pub fn program(tree: &KdTree) -> GpuProgram<'_> {
+    let (lo, hi) = tree.bounds;
+    let bounds: Vec<u32> = [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].iter().map(|v| v.to_bits()).collect();
+    GpuProgram {
+        label: "kdtree",
+        wgsl: WGSL,
+        buffers: vec![
+            GpuBuffer::words_of("nodes", &tree.nodes),
+            GpuBuffer::words_of("refs", &tree.refs),
+            GpuBuffer { name: "bounds", words: Cow::Owned(bounds) },
+            GpuBuffer::words_of("triangles", &tree.triangles[..]),
+        ],
+        prepass: None,
+        scratch_words: 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn wgsl_constants_match_the_structure() {
+        let wgsl = super::WGSL;
+        let stack = format!("const KD_STACK: u32 = {}u;", structures::kdtree::MAX_DEPTH + 1);
+        let leaf = format!("const KD_LEAF: u32 = {}u;", structures::kdtree::layout::LEAF);
+        assert!(wgsl.contains(&stack) && wgsl.contains(&leaf), "kdtree.wgsl must declare {stack} and {leaf}");
+        assert_eq!(1.0f32 / 8192.0, 0.0001220703125, "KD_MARGIN is cpu::kdtree's MARGIN");
+    }
+}
