@@ -18,7 +18,7 @@ use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// Relative widening of every interval end (2⁻¹³, as the BVH's cull margin).
-const MARGIN: f32 = 1.0 / 8192.0;
+pub(crate) const MARGIN: f32 = 1.0 / 8192.0;
 
 fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     let origin = ray.origin.to_array();

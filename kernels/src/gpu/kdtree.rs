@@ -34,7 +34,9 @@ mod tests {
         let wgsl = super::WGSL;
         let stack = format!("const KD_STACK: u32 = {}u;", structures::kdtree::MAX_DEPTH + 1);
         let leaf = format!("const KD_LEAF: u32 = {}u;", structures::kdtree::layout::LEAF);
-        assert!(wgsl.contains(&stack) && wgsl.contains(&leaf), "kdtree.wgsl must declare {stack} and {leaf}");
-        assert_eq!(1.0f32 / 8192.0, 0.0001220703125, "KD_MARGIN is cpu::kdtree's MARGIN");
+        let margin = format!("const KD_MARGIN: f32 = {};", f64::from(crate::cpu::kdtree::MARGIN));
+        for constant in [stack, leaf, margin] {
+            assert!(wgsl.contains(&constant), "kdtree.wgsl must declare {constant}");
+        }
     }
 }
