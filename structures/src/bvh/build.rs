@@ -12,7 +12,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
 use obvhs::triangle::Triangle as ObvhsTriangle;
 use rayon::prelude::*;
-use scenes::Triangle;
+use scenes::{Aabb, Triangle};
 
 use super::{Bvh, BvhNode, MAX_DEPTH};
 use crate::{BuildError, BuildInput};
@@ -270,10 +270,8 @@ fn flatten(
 
 /// The box around `ids`' triangles.
 fn bounds(ids: &[u32], triangles: &[Triangle]) -> (Vec3, Vec3) {
-    ids.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &t| {
-        let [a, b, c] = triangles[t as usize];
-        (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
-    })
+    let b = Aabb::from_points(ids.iter().flat_map(|&t| triangles[t as usize]));
+    (b.min, b.max)
 }
 
 /// A tree of median splits: each node halves its triangles by count at the median centroid
@@ -318,10 +316,8 @@ impl Halving<'_> {
         }
         let mid = ids.len() / 2;
         if let Some(c) = centroids {
-            let (lo, hi) = ids.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &t| {
-                (lo.min(c[t as usize]), hi.max(c[t as usize]))
-            });
-            let axis = (hi - lo).max_position();
+            let spread = Aabb::from_points(ids.iter().map(|&t| c[t as usize]));
+            let axis = (spread.max - spread.min).max_position();
             ids.select_nth_unstable_by(mid, |&a, &b| c[a as usize][axis].total_cmp(&c[b as usize][axis]));
         }
         let first = self.nodes.len();

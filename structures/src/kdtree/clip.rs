@@ -33,9 +33,9 @@ pub fn clipped_bounds(tri: &Triangle, cell: (Vec3, Vec3)) -> Option<(Vec3, Vec3)
             }
         }
     }
-    let (lo, hi) = poly.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let b = scenes::Aabb::from_points(poly);
     // Rounding may put an interpolated corner a hair outside: the box stays inside the cell.
-    Some((lo.max(cell.0), hi.min(cell.1)))
+    Some((b.min.max(cell.0), b.max.min(cell.1)))
 }
 
 #[cfg(test)]

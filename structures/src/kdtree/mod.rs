@@ -103,11 +103,8 @@ impl KdTree {
     pub fn build(input: &BuildInput) -> Result<Self, BuildError> {
         let params = KdParams::from_params(input.params)?;
         let triangles = input.triangles.clone();
-        let bounds = triangles
-            .iter()
-            .flatten()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        let bounds = if triangles.is_empty() { (Vec3::ZERO, Vec3::ZERO) } else { bounds };
+        let b = scenes::Aabb::from_points(triangles.iter().flatten().copied());
+        let bounds = if triangles.is_empty() { (Vec3::ZERO, Vec3::ZERO) } else { (b.min, b.max) };
         let max_depth = params.depth_for(triangles.len());
         let tree = build::build_tree(&triangles, bounds, &params, max_depth);
         let (nodes, refs, depth) = flatten(tree);

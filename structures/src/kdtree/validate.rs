@@ -1,7 +1,5 @@
 //! Structural checks of a kd-tree, used by the builder (debug) and the tests.
 
-use glam::Vec3;
-
 use super::{KdTree, MAX_DEPTH};
 
 impl KdTree {
@@ -42,11 +40,9 @@ impl KdTree {
                     lo[axis], hi[axis]
                 ));
             }
-            let (mut below_hi, mut above_lo): (Vec3, Vec3) = (hi, lo);
-            below_hi[axis] = split;
-            above_lo[axis] = split;
-            pending.push((first, (lo, below_hi), depth + 1));
-            pending.push((first + 1, (above_lo, hi), depth + 1));
+            let (below, above) = super::build::split_box((lo, hi), axis, split);
+            pending.push((first, below, depth + 1));
+            pending.push((first + 1, above, depth + 1));
         }
         if visited != self.nodes.len() {
             return Err(format!("{} nodes stored, {visited} reachable", self.nodes.len()));
