@@ -8,9 +8,19 @@
 //! rounded, so each interval end is widened by [`MARGIN`] (a plane within rounding of an end opens
 //! both children); a ray lying in a split plane walks both sides; a triangle is listed in every
 //! leaf its clipped box meets, so the nearest hit's point is in a visited leaf.
+//!
+//! `kdtree.traversal=restart`: kd-restart (Foley & Sugerman, "KD-tree acceleration structures for
+//! a GPU raytracer", HWWS 2005; seed 003), which keeps no stack: the ray descends from the root to
+//! the leaf holding the start of its remaining interval, tests it, and restarts from the root with
+//! the interval beginning at that leaf's exit, until a hit lies before the exit or the interval is
+//! spent. A plane's `t` is computed the same way on every descent, so the leaves' intervals tile
+//! the ray and every restart makes progress. Two cases need both sides of a plane, which no single
+//! path gives, and are handed to the stack walk: a ray lying in a split plane, and a ray crossing a
+//! plane within the margin of the start of its interval (a cell between two nearly simultaneous
+//! crossings, a sliver the rounded intervals can lose, where an edge or a vertex may be hit).
 
 use scenes::{Camera, Ray};
-use structures::kdtree::{KdTree, MAX_DEPTH};
+use structures::kdtree::{KdTraversal, KdTree, MAX_DEPTH};
 
 use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
@@ -100,13 +110,103 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
     })
 }
 
+/// Two plane crossings closer than this (relative) may be in either order: each `t` is
+/// `(split − o)·(1/d)`, three roundings, within 2⁻²² of the exact value; 2⁻²⁰ leaves room.
+pub(crate) const RESTART_TIE: f32 = 1.0 / 1_048_576.0;
+
+/// kd-restart (see the module doc); `None` when the ray must be handed to the stack walk.
+fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Option<Hit>> {
+    let origin = ray.origin.to_array();
+    let dir = ray.dir.to_array();
+    let inv = slab::reciprocal(ray.dir);
+    let (lo, hi) = (tree.bounds.0.to_array(), tree.bounds.1.to_array());
+    let Some((t_enter, t_exit)) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max) else {
+        return Some(None);
+    };
+    let sheared = ShearedRay::new(ray);
+    let (mut best_t, mut best_prim) = (t_max, u32::MAX);
+    let mut t_start = t_enter;
+    // The node whose plane the interval starts at (none at the tree's entry).
+    let mut start_plane = usize::MAX;
+    loop {
+        // DESCEND from the root to the leaf holding `t_start`.
+        let (mut node, t_near, mut t_far) = (0usize, t_start, t_exit);
+        let mut exit_plane = usize::MAX;
+        loop {
+            stats.step();
+            stats.visit();
+            let n = &tree.nodes[node];
+            if n.is_leaf() {
+                break;
+            }
+            let (axis, split, first) = (n.axis(), n.split(), n.first_child());
+            let o = origin[axis];
+            let below_first = o < split || (o == split && dir[axis] <= 0.0);
+            let (near, far) = if below_first { (first, first + 1) } else { (first + 1, first) };
+            let t_split = (split - o) * inv[axis];
+            let tie = |t: f32| (t_split - t).abs() <= RESTART_TIE * t;
+            if dir[axis] == 0.0 || t_split.is_nan() {
+                if o == split {
+                    return None; // in the plane: both sides
+                }
+                node = near;
+            } else if t_split > 0.0 && node != start_plane && (tie(t_near) || tie(t_far)) {
+                // The ray crosses this plane within rounding of where it crosses the plane its
+                // interval starts or ends at (or where it enters or leaves the tree): the order
+                // of the two crossings is not known, a cell between them may be a sliver the
+                // computed intervals lose, and only the stack walk, which visits both sides of
+                // the plane, is exact.
+                return None;
+            } else if t_split <= 0.0 || t_split >= t_far {
+                node = near;
+            } else if t_split <= t_near {
+                node = far;
+            } else {
+                exit_plane = node;
+                node = near;
+                t_far = t_split;
+            }
+        }
+        let leaf = &tree.nodes[node];
+        for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
+            stats.prim_test();
+            if let Some(t) = sheared.intersect(&tree.triangles[r as usize], t_min, best_t) {
+                best_t = t;
+                best_prim = r;
+            }
+        }
+        // A hit before this leaf's exit (by more than the margin) is the nearest: every later
+        // leaf starts at or after the exit. Otherwise RESTART past the leaf.
+        if best_t < t_far * (1.0 - MARGIN) || t_far >= t_exit {
+            break;
+        }
+        t_start = t_far;
+        start_plane = exit_plane;
+    }
+    Some((best_prim != u32::MAX).then(|| Hit {
+        t: best_t,
+        normal: geometric_normal(&tree.triangles[best_prim as usize]),
+        prim: u64::from(best_prim),
+    }))
+}
+
+fn trace_any<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    match tree.params.traversal {
+        KdTraversal::Stack => trace(tree, ray, t_min, t_max, stats),
+        KdTraversal::Restart => match trace_restart(tree, ray, t_min, t_max, stats) {
+            Some(hit) => hit,
+            None => trace(tree, ray, t_min, t_max, stats),
+        },
+    }
+}
+
 impl Traverse for KdTree {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        trace_any(self, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        trace_any(self, ray, t_min, t_max, counters)
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

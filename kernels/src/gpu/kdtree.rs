@@ -3,13 +3,14 @@
 
 use std::borrow::Cow;
 
-use structures::kdtree::KdTree;
+use structures::kdtree::{KdTraversal, KdTree};
 
 use super::{GpuBuffer, GpuProgram};
 
 pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("triangle.wgsl"), include_str!("kdtree.wgsl"));
 
-/// The program of `kdtree`: its [`structures::kdtree::KdNode`] words, refs, bounds and triangles.
+/// The program of `kdtree`: its [`structures::kdtree::KdNode`] words, refs, bounds and triangles,
+/// and which traversal to run.
 pub fn program(tree: &KdTree) -> GpuProgram<'_> {
     let (lo, hi) = tree.bounds;
     let bounds: Vec<u32> = [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].iter().map(|v| v.to_bits()).collect();
@@ -21,6 +22,10 @@ pub fn program(tree: &KdTree) -> GpuProgram<'_> {
             GpuBuffer::words_of("refs", &tree.refs),
             GpuBuffer { name: "bounds", words: Cow::Owned(bounds) },
             GpuBuffer::words_of("triangles", &tree.triangles[..]),
+            GpuBuffer {
+                name: "traversal",
+                words: Cow::Owned(vec![u32::from(tree.params.traversal == KdTraversal::Restart)]),
+            },
         ],
         prepass: None,
         scratch_words: 0,
@@ -35,7 +40,8 @@ mod tests {
         let stack = format!("const KD_STACK: u32 = {}u;", structures::kdtree::MAX_DEPTH + 1);
         let leaf = format!("const KD_LEAF: u32 = {}u;", structures::kdtree::layout::LEAF);
         let margin = format!("const KD_MARGIN: f32 = {};", f64::from(crate::cpu::kdtree::MARGIN));
-        for constant in [stack, leaf, margin] {
+        let tie = format!("const KD_RESTART_TIE: f32 = {};", f64::from(crate::cpu::kdtree::RESTART_TIE));
+        for constant in [stack, leaf, margin, tie] {
             assert!(wgsl.contains(&constant), "kdtree.wgsl must declare {constant}");
         }
     }

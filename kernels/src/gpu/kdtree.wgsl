@@ -9,6 +9,7 @@
 // - `refs`: triangle ids, grouped by leaf.
 // - `bounds`: the root cell, lo.xyz then hi.xyz (f32 bits).
 // - `triangles`: the scene's triangle soup (read by triangle.wgsl).
+// - `traversal`: 0 for the stack walk, 1 for kd-restart (`kdtree.traversal`).
 
 // structures::kdtree::MAX_DEPTH + 1: the builder never goes deeper (checked by a Rust test).
 const KD_STACK: u32 = 65u;
@@ -16,8 +17,10 @@ const KD_STACK: u32 = 65u;
 const KD_LEAF: u32 = 3u;
 // cpu::kdtree's MARGIN, 2⁻¹³: every interval end is widened by it.
 const KD_MARGIN: f32 = 0.0001220703125;
+// cpu::kdtree's RESTART_TIE, 2⁻²⁰: plane crossings closer than this may be in either order.
+const KD_RESTART_TIE: f32 = 0.00000095367431640625;
 
-fn trace(ray: Ray, index: u32) -> TraceResult {
+fn kd_trace_stack(ray: Ray) -> TraceResult {
     let inv = reciprocal(ray.dir);
     let lo = vec3<f32>(bitcast<f32>(bounds(0u)), bitcast<f32>(bounds(1u)), bitcast<f32>(bounds(2u)));
     let hi = vec3<f32>(bitcast<f32>(bounds(3u)), bitcast<f32>(bounds(4u)), bitcast<f32>(bounds(5u)));
@@ -108,4 +111,106 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
         return no_hit();
     }
     return TraceResult(true, best_t, best_prim, 0u);
+}
+
+// kd-restart (cpu::kdtree's trace_restart, step for step): no stack; the ray descends to the leaf
+// holding the start of its interval, tests it, and restarts past the leaf's exit. `fallback`: the
+// ray lies in a split plane, or crosses a plane within KD_RESTART_TIE of where its interval starts
+// or ends, and must be walked with the stack.
+struct KdRestart {
+    fallback: bool,
+    result: TraceResult,
+}
+
+fn kd_trace_restart(ray: Ray) -> KdRestart {
+    let inv = reciprocal(ray.dir);
+    let lo = vec3<f32>(bitcast<f32>(bounds(0u)), bitcast<f32>(bounds(1u)), bitcast<f32>(bounds(2u)));
+    let hi = vec3<f32>(bitcast<f32>(bounds(3u)), bitcast<f32>(bounds(4u)), bitcast<f32>(bounds(5u)));
+    let span = slab_span(ray.origin, inv, lo, hi, ray.t_min, ray.t_max);
+    if (!enters(span)) {
+        return KdRestart(false, no_hit());
+    }
+    let sheared = sheared_ray(ray);
+    let t_exit = span.y;
+    var best_t = ray.t_max;
+    var best_prim = NO_PRIM;
+    var t_start = span.x;
+    var start_plane = NO_PRIM;
+    var guard = 0u;
+    loop {
+        // DESCEND from the root to the leaf holding t_start.
+        var node = 0u;
+        let t_near = t_start;
+        var t_far = t_exit;
+        var exit_plane = NO_PRIM;
+        loop {
+            if (!next_step(&guard)) {
+                return KdRestart(false, no_hit());
+            }
+            let flags = nodes(node * 2u);
+            let axis = flags & 3u;
+            if (axis == KD_LEAF) {
+                break;
+            }
+            let split = bitcast<f32>(nodes(node * 2u + 1u));
+            let first = flags >> 2u;
+            let o = ray.origin[axis];
+            let d = ray.dir[axis];
+            var near = first + 1u;
+            var far = first;
+            if (o < split || (o == split && d <= 0.0)) {
+                near = first;
+                far = first + 1u;
+            }
+            let t_split = (split - o) * inv[axis];
+            let tie = abs(t_split - t_near) <= KD_RESTART_TIE * t_near || abs(t_split - t_far) <= KD_RESTART_TIE * t_far;
+            if (d == 0.0 || t_split != t_split) {
+                if (o == split) {
+                    return KdRestart(true, no_hit());
+                }
+                node = near;
+            } else if (t_split > 0.0 && node != start_plane && tie) {
+                return KdRestart(true, no_hit());
+            } else if (t_split <= 0.0 || t_split >= t_far) {
+                node = near;
+            } else if (t_split <= t_near) {
+                node = far;
+            } else {
+                exit_plane = node;
+                node = near;
+                t_far = t_split;
+            }
+        }
+        // LEAF: its triangles, nearest hit kept.
+        let flags = nodes(node * 2u);
+        let data = nodes(node * 2u + 1u);
+        let count = flags >> 2u;
+        for (var k = data; k < data + count; k++) {
+            let prim = refs(k);
+            let t = intersect_triangle(sheared, prim, ray.t_min, best_t);
+            if (t < best_t) {
+                best_t = t;
+                best_prim = prim;
+            }
+        }
+        if (best_t < t_far * (1.0 - KD_MARGIN) || t_far >= t_exit) {
+            break;
+        }
+        t_start = t_far;
+        start_plane = exit_plane;
+    }
+    if (best_prim == NO_PRIM) {
+        return KdRestart(false, no_hit());
+    }
+    return KdRestart(false, TraceResult(true, best_t, best_prim, 0u));
+}
+
+fn trace(ray: Ray, index: u32) -> TraceResult {
+    if (traversal(0u) == 1u) {
+        let restart = kd_trace_restart(ray);
+        if (!restart.fallback) {
+            return restart.result;
+        }
+    }
+    return kd_trace_stack(ray);
 }

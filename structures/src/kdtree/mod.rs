@@ -7,7 +7,9 @@
 //! intersection costs (15 and 20, Wald & Havran §3); `empty_bonus`, the share a split that cuts off
 //! an empty child saves (0.2); `max_depth` (0: 8 + 1.3·log₂N, the paper's rule, capped at
 //! [`MAX_DEPTH`]); `leaf_size`, a node of at most this many triangles is a leaf (1: the SAH alone
-//! decides); `perfect_splits` (`on`).
+//! decides); `perfect_splits` (`on`); `traversal`, how the kernels walk the tree: `stack` (a stack
+//! of far children, the default) or `restart` (kd-restart, Foley & Sugerman 2005, seed 003: no
+//! stack; after each leaf the ray restarts from the root past that leaf).
 
 mod build;
 pub mod clip;
@@ -35,16 +37,27 @@ pub struct KdParams {
     pub max_depth: u32,
     pub leaf_size: u32,
     pub perfect_splits: bool,
+    pub traversal: KdTraversal,
+}
+
+/// How the kernels walk the tree (`kdtree.traversal`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KdTraversal {
+    /// Front to back with a stack of far children (Havran's TA_B^rec, iterative).
+    Stack,
+    /// kd-restart (Foley & Sugerman 2005): no stack; each leaf's exit restarts the descent.
+    Restart,
 }
 
 impl KdParams {
-    pub const KEYS: [&'static str; 6] = [
+    pub const KEYS: [&'static str; 7] = [
         "kdtree.ct",
         "kdtree.ci",
         "kdtree.empty_bonus",
         "kdtree.max_depth",
         "kdtree.leaf_size",
         "kdtree.perfect_splits",
+        "kdtree.traversal",
     ];
 
     pub fn from_params(params: &Params) -> Result<Self, BuildError> {
@@ -55,6 +68,11 @@ impl KdParams {
             max_depth: params.get("kdtree.max_depth", 0)?,
             leaf_size: params.get("kdtree.leaf_size", 1)?,
             perfect_splits: params.choice("kdtree.perfect_splits", true, &[("on", true), ("off", false)])?,
+            traversal: params.choice(
+                "kdtree.traversal",
+                KdTraversal::Stack,
+                &[("stack", KdTraversal::Stack), ("restart", KdTraversal::Restart)],
+            )?,
         };
         let bad =
             |key: &str, detail: &str| Err(BuildError::BadParam { key: format!("kdtree.{key}"), detail: detail.into() });
@@ -198,6 +216,7 @@ impl Structure for KdTree {
             "max_depth": p.depth_for(self.triangles.len()),
             "leaf_size": p.leaf_size,
             "perfect_splits": if p.perfect_splits { "on" } else { "off" },
+            "traversal": match p.traversal { KdTraversal::Stack => "stack", KdTraversal::Restart => "restart" },
             "depth": self.depth,
             "sah_cost": self.sah_cost(),
         })
