@@ -163,6 +163,19 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
         // node), the temporary tree and the references: peaks of 163–212 B per triangle on
         // bunny, city and the dragon (perfect splits on).
         "kdtree" => 320.0 * n,
+        // The triangles' boxes (24 B), then per level the children's lists beside the laid-out
+        // references: about 20 B per reference at the peak. References per triangle over the
+        // built-in scenes: 6–17 at `leaf_size` 8 with exact lists (peaks 113–361 B per triangle),
+        // 39–118 at 1 (1.4–5.6 KB), 14–46 with bounding boxes (180–760 B) — so 16 per triangle at
+        // 8, growing as (8 / leaf_size)^1.3, tripled for boxes; never past the builder's
+        // `MAX_REFS_PER_TRIANGLE`: it stops refining first (long thin triangles in boxes).
+        "octree" => {
+            let Ok(p) = structures::octree::OctreeParams::from_params(input.params) else { return 0 };
+            let per_leaf = (8.0 / f64::from(p.leaf_size)).max(1.0).powf(1.3);
+            let boxes = if p.cell_test == structures::octree::CellTest::Bbox { 3.0 } else { 1.0 };
+            let refs = (16.0 * per_leaf * boxes).min(structures::octree::MAX_REFS_PER_TRIANGLE as f64);
+            (48.0 + 24.0 * refs) * n
+        }
         // The same PLOC build, plus the crate-format triangle copy (48 B) kept by the structure.
         "obvhs" | "cwbvh" => 400.0 * n,
         // Our vertex copy (36 B) and Embree's own heap (buffers, build primitives, BVH), which its

@@ -322,7 +322,7 @@ fn a_scene_a_billion_units_wide_renders_in_every_voxel_structure() {
 }
 
 /// The triangle structures of the default preset (Embree where its library is installed).
-const TRIANGLE_STRUCTURES: &str = "bvh,obvhs,cwbvh,embree,kdtree,ug,rg,rg2,org";
+const TRIANGLE_STRUCTURES: &str = "bvh,obvhs,cwbvh,embree,kdtree,octree,ug,rg,rg2,org";
 
 /// One face repeated 200,000 times at one place, as exported and CAD meshes have them: it made
 /// the reference BVH quadratic (over 100 s) and then too deep to trace, so no structure could be

@@ -106,6 +106,16 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
     StructureEntry {
+        name: "octree",
+        family: "triangle",
+        summary: "octree over triangles: cells split past octree.leaf_size (8) to octree.max_depth, breadth-first \
+                  child/leaf masks, Revelles et al.'s parametric traversal, mailboxing",
+        params: &structures::octree::OctreeParams::KEYS,
+        check: |p| structures::octree::OctreeParams::from_params(p).map(drop),
+        build: |input| Ok(Box::new(structures::octree::TriOctree::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
         name: "org",
         family: "triangle",
         summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8, org.leaf_lambda = org.lambda, org.beta level|counted, org.gamma_test reduced|unreduced, org.cell_test bbox|sat)",

@@ -9,6 +9,8 @@
 //! |---|---|---|
 //! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
 //! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
+//! | [`kdtree`] | SAH kd-tree (Wald & Havran 2006), 8-byte nodes | seed 002, issue 29 |
+//! | [`octree`] | octree over triangles, breadth-first child/leaf masks | seed 002, issue 29 |
 //! | [`voxel`] | conservative voxelisation, the canonical octree | §4.1 |
 //! | [`svo_naive`], [`svo`] | the plain SVO baselines | §4.2, seeds 004, 001 |
 //! | [`esvo`] | Laine & Karras ESVO | §4.3, seed 000 |
@@ -30,6 +32,7 @@ pub(crate) mod intern;
 pub mod kdtree;
 pub mod memory;
 pub mod obvhs;
+pub mod octree;
 pub mod params;
 pub mod svdag;
 pub mod svo;

@@ -300,3 +300,50 @@ fn voxel_grid_variants() {
     }
     assert!(failures.is_empty(), "hierarchical grid variants differ from the CPU:\n{}", failures.join("\n"));
 }
+
+/// The kd-tree's and the triangle octree's switches beyond their defaults: kd-restart (with its
+/// fall-back to the stack walk), the kd-tree without perfect splits, and the octree with
+/// bounding-box lists, without mailboxing, and with one triangle per leaf. The GPU must also take
+/// the CPU's steps: the counted steps per ray are equal.
+#[test]
+fn kdtree_and_octree_variants() {
+    let Some(ctx) = context_for_tests("gpu::kdtree_and_octree_variants") else {
+        return;
+    };
+    let variants: [(&str, &str, &[&str]); 5] = [
+        ("kd-restart", "kdtree", &["kdtree.traversal=restart"]),
+        ("kd-nopsplit", "kdtree", &["kdtree.perfect_splits=off"]),
+        ("oct-bbox", "octree", &["octree.cell_test=bbox"]),
+        ("oct-nomail", "octree", &["octree.mailbox=off"]),
+        ("oct-leaf1", "octree", &["octree.leaf_size=1"]),
+    ];
+    let mut failures = Vec::new();
+    for name in ["bunny", "city", "teapot", "room"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let camera = Camera::new(scene.camera_spec(), SIZE, SIZE);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        for (label, structure, extra) in variants {
+            let t = Instant::now();
+            let entry = kernels::find_structure(structure).expect("registered");
+            let params = Params::parse(extra.iter().copied()).expect("params");
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"));
+            failures.extend(compare(ctx, name, label, accel.as_ref(), &camera, &shade, t));
+            let opts = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
+                .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
+                .and_then(|r| r.steps_per_ray())
+                .expect("counted steps");
+            let mut counters = kernels::Counters::default();
+            for ray in (0..SIZE * SIZE).map(|i| camera.ray(i % SIZE, i / SIZE)) {
+                accel.intersect_counted(&ray, 0.0, f32::INFINITY, &mut counters);
+            }
+            let cpu = counters.steps as f64 / f64::from(SIZE * SIZE);
+            eprintln!("gpu {name:<12} {label:<11} steps per ray: GPU {gpu:.3}, CPU {cpu:.3}");
+            if (gpu / cpu - 1.0).abs() > 1e-9 {
+                failures.push(format!("{name} {label}: GPU takes {gpu:.3} steps per ray, the CPU {cpu:.3}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "kd-tree/octree variants differ from the CPU:\n{}", failures.join("\n"));
+}

@@ -9,6 +9,7 @@ pub mod esvo;
 pub mod grid;
 pub mod kdtree;
 pub mod obvhs;
+pub mod octree;
 pub mod octree_cast;
 pub mod octree_ray;
 pub mod render;

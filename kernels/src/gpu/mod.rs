@@ -24,6 +24,7 @@ pub(crate) mod cwbvh;
 pub mod dispatch;
 pub(crate) mod grid;
 pub(crate) mod kdtree;
+pub(crate) mod octree;
 pub mod program;
 pub mod rays;
 pub mod render;

@@ -21,6 +21,7 @@ use glam::{DVec3, Vec3};
 use scenes::{Aabb, Ray};
 
 pub use octree::{Octree, OctreeBuilder, OctreeLevel};
+pub(crate) use voxelize::TriangleSat;
 pub use voxelize::{
     MAX_VOXELIZE_LEVEL, VoxelizeStats, touched_subcubes, triangle_overlaps_box, voxelize, voxelize_all,
     voxelize_subcubes,

@@ -421,7 +421,7 @@ impl SubcubeBoxes {
 /// A triangle set up for repeated separating-axis tests against boxes (see
 /// [`triangle_overlaps_box`]): per axis, the interval the triangle projects to, in a frame at its
 /// first vertex, so that a box costs one projection of its centre per axis.
-struct TriangleSat {
+pub(crate) struct TriangleSat {
     /// The frame's origin, the first vertex.
     origin: DVec3,
     /// The triangle's bounding box in the frame (the three box axes).
@@ -437,7 +437,7 @@ struct TriangleSat {
 }
 
 impl TriangleSat {
-    fn new(tri: [DVec3; 3]) -> Self {
+    pub(crate) fn new(tri: [DVec3; 3]) -> Self {
         let origin = tri[0];
         let v = tri.map(|p| p - origin);
         let e = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
@@ -464,7 +464,7 @@ impl TriangleSat {
 
     /// Whether the triangle overlaps the closed box `center ± half`: no axis separates them.
     #[inline]
-    fn overlaps(&self, center: DVec3, half: DVec3) -> bool {
+    pub(crate) fn overlaps(&self, center: DVec3, half: DVec3) -> bool {
         let c = center - self.origin;
         if (self.lo - c).cmpgt(half).any() || (self.hi - c).cmplt(-half).any() {
             return false;
