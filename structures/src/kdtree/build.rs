@@ -18,17 +18,45 @@ const END: u8 = 0;
 const PLANAR: u8 = 1;
 const START: u8 = 2;
 
-/// One end of a triangle's box on one axis. `tri` is an index into the node's triangle list.
+/// One end of a triangle's box on one axis, in 8 bytes (the build streams hundreds of millions):
+/// the position, and a key holding the axis (bits 30–31), the kind (bits 28–29) and the
+/// triangle's index into the node's triangle list (bits 0–27), so that ordering the keys orders
+/// by axis, then kind.
 #[derive(Clone, Copy, Debug)]
 struct Event {
     pos: f32,
-    tri: u32,
-    axis: u8,
-    kind: u8,
+    key: u32,
+}
+
+/// The most triangles a node's local indices can number.
+pub(super) const MAX_TRIANGLES: usize = 1 << 28;
+const TRI_BITS: u32 = (1 << 28) - 1;
+
+impl Event {
+    fn new(pos: f32, tri: u32, axis: u8, kind: u8) -> Self {
+        debug_assert!(tri <= TRI_BITS && axis < 3 && kind <= START);
+        Self { pos, key: u32::from(axis) << 30 | u32::from(kind) << 28 | tri }
+    }
+
+    fn tri(&self) -> u32 {
+        self.key & TRI_BITS
+    }
+
+    fn axis(&self) -> u8 {
+        (self.key >> 30) as u8
+    }
+
+    fn kind(&self) -> u8 {
+        (self.key >> 28 & 3) as u8
+    }
+
+    fn with_tri(self, tri: u32) -> Self {
+        Self { key: self.key & !TRI_BITS | tri, ..self }
+    }
 }
 
 fn event_order(a: &Event, b: &Event) -> std::cmp::Ordering {
-    a.pos.total_cmp(&b.pos).then(a.axis.cmp(&b.axis)).then(a.kind.cmp(&b.kind))
+    a.pos.total_cmp(&b.pos).then((a.key >> 28).cmp(&(b.key >> 28)))
 }
 
 /// A node's triangles (global ids) and its events (over local indices into `tris`), sorted.
@@ -69,8 +97,8 @@ fn box_events((lo, hi): (Vec3, Vec3), tri: u32) -> impl Iterator<Item = Event> {
     (0..3u8).flat_map(move |axis| {
         let (a, b) = (lo[axis as usize], hi[axis as usize]);
         let planar = a == b;
-        let first = Event { pos: a, tri, axis, kind: if planar { PLANAR } else { START } };
-        let second = (!planar).then_some(Event { pos: b, tri, axis, kind: END });
+        let first = Event::new(a, tri, axis, if planar { PLANAR } else { START });
+        let second = (!planar).then_some(Event::new(b, tri, axis, END));
         std::iter::once(first).chain(second)
     })
 }
@@ -120,10 +148,10 @@ impl Ctx<'_> {
         let events = &input.events;
         let mut i = 0;
         while i < events.len() {
-            let (axis, pos) = (events[i].axis, events[i].pos);
+            let (axis, pos) = (events[i].axis(), events[i].pos);
             let mut counts = [0u32; 3];
-            while i < events.len() && events[i].axis == axis && events[i].pos == pos {
-                counts[events[i].kind as usize] += 1;
+            while i < events.len() && events[i].axis() == axis && events[i].pos == pos {
+                counts[events[i].kind() as usize] += 1;
                 i += 1;
             }
             let [ends, planar, starts] = counts;
@@ -165,69 +193,70 @@ impl Ctx<'_> {
         below: (Vec3, Vec3),
         above: (Vec3, Vec3),
     ) -> (NodeInput, NodeInput) {
-        const BOTH: u8 = 0;
-        const LEFT: u8 = 1;
-        const RIGHT: u8 = 2;
+        // One word per triangle: its side in the top two bits, its index in its child (the left
+        // one for a straddler) below: one random read per event in the filtering pass.
+        const BOTH: u32 = 0;
+        const LEFT: u32 = 1 << 30;
+        const RIGHT: u32 = 2 << 30;
+        const INDEX: u32 = (1 << 30) - 1;
         let NodeInput { tris, events } = input;
-        let mut side = vec![BOTH; tris.len()];
-        for e in events.iter().filter(|e| e.axis as usize == plane.axis) {
-            let t = e.tri as usize;
-            match e.kind {
-                END if e.pos <= plane.pos => side[t] = LEFT,
-                START if e.pos >= plane.pos => side[t] = RIGHT,
-                PLANAR if e.pos < plane.pos || (e.pos == plane.pos && plane.planar_left) => side[t] = LEFT,
-                PLANAR => side[t] = RIGHT,
+        let mut word = vec![BOTH; tris.len()];
+        for e in events.iter().filter(|e| e.axis() as usize == plane.axis) {
+            let t = e.tri() as usize;
+            match e.kind() {
+                END if e.pos <= plane.pos => word[t] = LEFT,
+                START if e.pos >= plane.pos => word[t] = RIGHT,
+                PLANAR if e.pos < plane.pos || (e.pos == plane.pos && plane.planar_left) => word[t] = LEFT,
+                PLANAR => word[t] = RIGHT,
                 _ => {}
             }
         }
-        // Local indices in each child: one-sided triangles first (in order), then straddling ones.
-        let mut map = [vec![u32::MAX; tris.len()], vec![u32::MAX; tris.len()]];
+        // Local indices in each child, in the node's order (one-sided and straddling mixed).
         let mut child_tris = [Vec::new(), Vec::new()];
-        for (t, &s) in side.iter().enumerate() {
-            for c in 0..2 {
-                if s == BOTH || s == [LEFT, RIGHT][c] {
-                    map[c][t] = child_tris[c].len() as u32;
-                    child_tris[c].push(tris[t]);
+        let mut straddlers: Vec<(u32, [u32; 2])> = Vec::new();
+        for (t, w) in word.iter_mut().enumerate() {
+            let (l, r) = (child_tris[0].len() as u32, child_tris[1].len() as u32);
+            match *w {
+                LEFT => {
+                    *w |= l;
+                    child_tris[0].push(tris[t]);
+                }
+                RIGHT => {
+                    *w |= r;
+                    child_tris[1].push(tris[t]);
+                }
+                _ => {
+                    straddlers.push((tris[t], [l, r]));
+                    child_tris[0].push(tris[t]);
+                    child_tris[1].push(tris[t]);
                 }
             }
         }
-        // The one-sided triangles' events, filtered: still sorted (counted first, so each list is
-        // allocated once).
-        let mut sizes = [0usize; 2];
+        drop(tris);
+        // The one-sided triangles' events, filtered: still sorted. At most six per triangle.
+        let mut only = child_tris.each_ref().map(|c| Vec::with_capacity(6 * c.len()));
         for e in &events {
-            match side[e.tri as usize] {
-                LEFT => sizes[0] += 1,
-                RIGHT => sizes[1] += 1,
-                _ => {}
-            }
-        }
-        let mut only = sizes.map(Vec::with_capacity);
-        for e in &events {
-            let s = side[e.tri as usize];
-            if s != BOTH {
-                let c = (s == RIGHT) as usize;
-                only[c].push(Event { tri: map[c][e.tri as usize], ..*e });
+            let w = word[e.tri() as usize];
+            if w & !INDEX != BOTH {
+                only[usize::from(w & RIGHT != 0)].push(e.with_tri(w & INDEX));
             }
         }
         drop(events);
+        drop(word);
         // The straddling triangles' events in each child: their boxes clipped to it.
         let mut children = [(below, 0usize), (above, 1usize)].map(|(cell, c)| {
-            let mut fresh: Vec<Event> = Vec::new();
-            let mut kept = vec![true; child_tris[c].len()];
-            for (t, &s) in side.iter().enumerate() {
-                if s != BOTH {
-                    continue;
-                }
-                let local = map[c][t];
-                match self.straddler_box(tris[t], cell) {
-                    Some(b) => fresh.extend(box_events(b, local)),
+            let mut fresh: Vec<Event> = Vec::with_capacity(6 * straddlers.len());
+            let mut dropped: Vec<u32> = Vec::new();
+            for &(tri, local) in &straddlers {
+                match self.straddler_box(tri, cell) {
+                    Some(b) => fresh.extend(box_events(b, local[c])),
                     // Perfect splits: the triangle only touches the cell (clipped away).
-                    None => kept[local as usize] = false,
+                    None => dropped.push(local[c]),
                 }
             }
             fresh.sort_unstable_by(event_order);
             let events = merge(std::mem::take(&mut only[c]), fresh);
-            compact(NodeInput { tris: std::mem::take(&mut child_tris[c]), events }, &kept)
+            compact(NodeInput { tris: std::mem::take(&mut child_tris[c]), events }, &dropped)
         });
         let right = children[1].take();
         let left = children[0].take();
@@ -252,24 +281,28 @@ impl NodeInput {
     }
 }
 
-/// Drops the triangles not `kept` (clipped away) and renumbers the events' local indices.
-fn compact(input: NodeInput, kept: &[bool]) -> NodeInput {
-    if kept.iter().all(|&k| k) {
+/// Drops the triangles `dropped` (local indices, increasing: clipped away) and renumbers the
+/// events' local indices.
+fn compact(input: NodeInput, dropped: &[u32]) -> NodeInput {
+    if dropped.is_empty() {
         return input;
     }
-    let mut renumber = vec![u32::MAX; kept.len()];
-    let mut tris = Vec::with_capacity(input.tris.len());
-    for (t, &k) in kept.iter().enumerate() {
-        if k {
-            renumber[t] = tris.len() as u32;
-            tris.push(input.tris[t]);
+    let mut renumber = vec![u32::MAX; input.tris.len()];
+    let mut tris = Vec::with_capacity(input.tris.len() - dropped.len());
+    let mut gone = dropped.iter().peekable();
+    for (t, &tri) in input.tris.iter().enumerate() {
+        if gone.peek() == Some(&&(t as u32)) {
+            gone.next();
+            continue;
         }
+        renumber[t] = tris.len() as u32;
+        tris.push(tri);
     }
     let events = input
         .events
         .into_iter()
-        .filter(|e| kept[e.tri as usize])
-        .map(|e| Event { tri: renumber[e.tri as usize], ..e })
+        .filter(|e| renumber[e.tri() as usize] != u32::MAX)
+        .map(|e| e.with_tri(renumber[e.tri() as usize]))
         .collect();
     NodeInput { tris, events }
 }

@@ -7,33 +7,39 @@ use scenes::Triangle;
 
 /// The box of `tri` ∩ `cell`, within `cell`; `None` when they do not meet.
 pub fn clipped_bounds(tri: &Triangle, cell: (Vec3, Vec3)) -> Option<(Vec3, Vec3)> {
-    // A triangle clipped by six planes has at most 9 corners.
-    let mut poly: Vec<Vec3> = tri.to_vec();
-    let mut next = Vec::with_capacity(9);
+    // A convex polygon clipped by a plane gains at most one corner: a triangle clipped by six
+    // planes has at most 9. Two fixed buffers, no allocation (this runs for every straddling
+    // triangle of every node).
+    let (mut poly, mut next) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9]);
+    poly[..3].copy_from_slice(tri);
+    let mut len = 3;
     for axis in 0..3 {
         for (bound, keep_above) in [(cell.0[axis], true), (cell.1[axis], false)] {
-            next.clear();
             let inside = |p: Vec3| if keep_above { p[axis] >= bound } else { p[axis] <= bound };
-            for i in 0..poly.len() {
-                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let mut out = 0;
+            for i in 0..len {
+                let (a, b) = (poly[i], poly[(i + 1) % len]);
                 let (ia, ib) = (inside(a), inside(b));
                 if ia {
-                    next.push(a);
+                    next[out] = a;
+                    out += 1;
                 }
                 if ia != ib {
                     let t = (bound - a[axis]) / (b[axis] - a[axis]);
                     let mut p = a + (b - a) * t;
                     p[axis] = bound; // exactly on the plane, whatever the rounding
-                    next.push(p);
+                    next[out] = p;
+                    out += 1;
                 }
             }
             std::mem::swap(&mut poly, &mut next);
-            if poly.is_empty() {
+            len = out;
+            if len == 0 {
                 return None;
             }
         }
     }
-    let b = scenes::Aabb::from_points(poly);
+    let b = scenes::Aabb::from_points(poly[..len].iter().copied());
     // Rounding may put an interpolated corner a hair outside: the box stays inside the cell.
     Some((b.min.max(cell.0), b.max.min(cell.1)))
 }

@@ -124,6 +124,12 @@ impl KdTree {
         let b = scenes::Aabb::from_points(triangles.iter().flatten().copied());
         let bounds = if triangles.is_empty() { (Vec3::ZERO, Vec3::ZERO) } else { (b.min, b.max) };
         let max_depth = params.depth_for(triangles.len());
+        if triangles.len() > build::MAX_TRIANGLES {
+            return Err(BuildError::Limit {
+                structure: "kdtree",
+                detail: format!("{} triangles; the 8-byte events index at most 2^28", triangles.len()),
+            });
+        }
         let tree = build::build_tree(&triangles, bounds, &params, max_depth);
         let (nodes, refs, depth) = flatten(tree);
         if nodes.len() as u64 > u64::from(layout::MAX_PAYLOAD) || refs.len() as u64 > u64::from(u32::MAX) {
