@@ -533,11 +533,15 @@ const PAPER_TABLE1: &[(&str, &[PaperRow])] = &[
 
 fn table1(results: &Results) -> Sheet {
     let mut out = Sheet::default();
-    let _ = writeln!(out, "## Seed 002 Table 1 — ORG against UG, RG, RG-2, the kd-tree and the reference BVH\n");
+    let _ = writeln!(
+        out,
+        "## Seed 002 Table 1 — ORG against UG, RG, RG-2, the kd-tree, the triangle octree and the reference BVH\n"
+    );
     let _ = writeln!(
         out,
         "In the paper's layout: N_c and N_p in thousands with r = N_c/N and N_p/N; N_c&p with its \
-         ratio to ORG's; build T_c, render T_r and their sum in ms with ratios s to ORG's.\n"
+         ratio to ORG's; build T_c, render T_r and their sum in ms with ratios s to ORG's; then each \
+         structure's traversal counters per primary ray.\n"
     );
     let mut scenes: Vec<&str> = Vec::new();
     for c in &results.cases {
@@ -589,6 +593,22 @@ fn table1(results: &Results) -> Sheet {
                     tc * 1e3,
                     tr * 1e3,
                     (tc + tr) * 1e3
+                );
+            }
+        }
+        // Where the time goes: the traversal's counters per primary ray (CPU), each structure beside ORG.
+        let _ = writeln!(out, "\n| per primary ray | steps | node/cell visits | triangle tests | Mrays/s |");
+        let _ = writeln!(out, "|---|---:|---:|---:|---:|");
+        for c in &cases {
+            if let Some(r) = c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary") {
+                let _ = writeln!(
+                    out,
+                    "| {} | {:.1} | {:.1} | {:.2} | {:.2} |",
+                    c.structure,
+                    r.steps_per_ray_mean,
+                    r.node_visits_per_ray_mean,
+                    r.prim_tests_per_ray_mean,
+                    r.mrays_per_s
                 );
             }
         }

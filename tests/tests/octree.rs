@@ -2,7 +2,8 @@
 //! built-in scene (axis-parallel, through vertices, along edges, from inside), with the exact
 //! cell test and with bounding boxes, mailboxing on and off; every triangle is listed in the leaf
 //! of every point on it (an independent point-location check); `validate` rejects corrupted
-//! records; bad parameters are refused.
+//! records; bad parameters are refused; primary renders of it and of the kd-tree equal the
+//! reference BVH's bit for bit.
 
 use std::sync::Arc;
 
@@ -169,4 +170,57 @@ fn the_reference_budget_stops_refinement_not_the_build() {
     let answers = brute_force_answers(&triangles, &rays);
     let bad = compare_with_answers(&tree, &rays, &answers);
     assert!(bad.is_empty(), "{} rays disagree; first: {:?}", bad.len(), bad.first());
+}
+
+/// Primary renders of the canonical cameras: the kd-tree (stack walk and kd-restart) and the
+/// octree give the reference BVH's hits bit for bit wherever the watertight test decides the same
+/// triangle — the same hit or miss on every pixel, the same `t` where the same triangle is hit —
+/// and where another triangle is hit, it is hit at the same `t` within the tie tolerance (a
+/// shared edge or vertex).
+#[test]
+fn primary_renders_equal_the_bvh() {
+    use kernels::cpu::render::{ShadeContext, Workload, render};
+    let variants: [(&str, &[&str]); 4] = [
+        ("kdtree", &[]),
+        ("kdtree", &["kdtree.traversal=restart"]),
+        ("octree", &[]),
+        ("octree", &["octree.cell_test=bbox", "octree.mailbox=off"]),
+    ];
+    for name in ["bunny", "city", "dragon-48k", "menger", "room", "stadium", "teapot", "terrain"] {
+        let scene = scenes::load_scene(name).expect("scene");
+        let camera = scenes::Camera::new(scene.camera_spec(), 256, 256);
+        let shade = ShadeContext::for_scene(&scene, 0);
+        let accel = |structure: &str, params: &[&str]| {
+            let params = Params::parse(params.iter().copied()).expect("params");
+            let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+            let entry = kernels::find_structure(structure).expect("registered");
+            (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {structure}: {e}"))
+        };
+        let reference = render(accel("bvh", &[]).as_ref(), &camera, &shade, Workload::Primary);
+        for (structure, params) in variants {
+            let frame = render(accel(structure, params).as_ref(), &camera, &shade, Workload::Primary);
+            let (mut same, mut ties) = (0u32, 0u32);
+            for (x, y, b) in reference.pixels() {
+                let s = frame.at(x, y);
+                assert_eq!(s.is_hit(), b.is_hit(), "{name} {structure} {params:?} pixel ({x}, {y}): hit or miss");
+                if !b.is_hit() {
+                    continue;
+                }
+                if s.prim == b.prim {
+                    assert_eq!(s.t.to_bits(), b.t.to_bits(), "{name} {structure} {params:?} ({x}, {y}): t");
+                    same += 1;
+                } else {
+                    let tie = (s.t - b.t).abs() <= tests::TIE_REL_T * b.t.abs();
+                    assert!(
+                        tie,
+                        "{name} {structure} {params:?} ({x}, {y}): {:?} against {:?}",
+                        (s.t, s.prim),
+                        (b.t, b.prim)
+                    );
+                    ties += 1;
+                }
+            }
+            eprintln!("{name} {structure} {params:?}: {same} hits equal to the BVH's, {ties} ties on another triangle");
+        }
+    }
 }
