@@ -20,7 +20,7 @@
 //! crossings, a sliver the rounded intervals can lose, where an edge or a vertex may be hit).
 
 use scenes::{Camera, Ray};
-use structures::kdtree::{KdTraversal, KdTree, MAX_DEPTH};
+use structures::kdtree::{KdNode, KdTraversal, KdTree, MAX_DEPTH};
 
 use super::slab;
 use super::triangle::{ShearedRay, geometric_normal};
@@ -29,6 +29,25 @@ use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// Relative widening of every interval end (2⁻¹³, as the BVH's cull margin).
 pub(crate) const MARGIN: f32 = 1.0 / 8192.0;
+
+/// An inner node as a ray meets it: the split axis, the origin's coordinate on it, the plane,
+/// and the children nearest first — the origin's side; on the plane, the side the ray heads into.
+struct Crossing {
+    axis: usize,
+    o: f32,
+    split: f32,
+    near: usize,
+    far: usize,
+}
+
+#[inline(always)]
+fn crossing(n: &KdNode, origin: &[f32; 3], dir: &[f32; 3]) -> Crossing {
+    let (axis, split, first) = (n.axis(), n.split(), n.first_child());
+    let o = origin[axis];
+    let below_first = o < split || (o == split && dir[axis] <= 0.0);
+    let (near, far) = if below_first { (first, first + 1) } else { (first + 1, first) };
+    Crossing { axis, o, split, near, far }
+}
 
 fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     let origin = ray.origin.to_array();
@@ -50,11 +69,7 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
             if n.is_leaf() {
                 break;
             }
-            let (axis, split, first) = (n.axis(), n.split(), n.first_child());
-            let o = origin[axis];
-            // The near child is the origin's side; on the plane, the side the ray heads into.
-            let below_first = o < split || (o == split && dir[axis] <= 0.0);
-            let (near, far) = if below_first { (first, first + 1) } else { (first + 1, first) };
+            let Crossing { axis, o, split, near, far } = crossing(n, &origin, &dir);
             if dir[axis] == 0.0 {
                 // Parallel to the plane: the origin's side only, or both when in the plane.
                 if o == split {
@@ -139,10 +154,7 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
             if n.is_leaf() {
                 break;
             }
-            let (axis, split, first) = (n.axis(), n.split(), n.first_child());
-            let o = origin[axis];
-            let below_first = o < split || (o == split && dir[axis] <= 0.0);
-            let (near, far) = if below_first { (first, first + 1) } else { (first + 1, first) };
+            let Crossing { axis, o, split, near, far } = crossing(n, &origin, &dir);
             let t_split = (split - o) * inv[axis];
             let tie = |t: f32| (t_split - t).abs() <= RESTART_TIE * t;
             if dir[axis] == 0.0 || t_split.is_nan() {

@@ -20,6 +20,16 @@ const KD_MARGIN: f32 = 0.0001220703125;
 // cpu::kdtree's RESTART_TIE, 2⁻²⁰: plane crossings closer than this may be in either order.
 const KD_RESTART_TIE: f32 = 0.00000095367431640625;
 
+// An inner node's children as (near, far) for a ray at `o` heading `d` on its axis: the origin's
+// side first; on the plane, the side the ray heads into (cpu::kdtree's `crossing`).
+fn kd_children(flags: u32, o: f32, split: f32, d: f32) -> vec2<u32> {
+    let first = flags >> 2u;
+    if (o < split || (o == split && d <= 0.0)) {
+        return vec2<u32>(first, first + 1u);
+    }
+    return vec2<u32>(first + 1u, first);
+}
+
 fn kd_trace_stack(ray: Ray) -> TraceResult {
     let inv = reciprocal(ray.dir);
     let lo = vec3<f32>(bitcast<f32>(bounds(0u)), bitcast<f32>(bounds(1u)), bitcast<f32>(bounds(2u)));
@@ -49,15 +59,11 @@ fn kd_trace_stack(ray: Ray) -> TraceResult {
         if (axis != KD_LEAF) {
             // DESCEND: the near child is the origin's side; on the plane, the side the ray heads into.
             let split = bitcast<f32>(data);
-            let first = flags >> 2u;
             let o = ray.origin[axis];
             let d = ray.dir[axis];
-            var near = first + 1u;
-            var far = first;
-            if (o < split || (o == split && d <= 0.0)) {
-                near = first;
-                far = first + 1u;
-            }
+            let children = kd_children(flags, o, split, d);
+            let near = children.x;
+            let far = children.y;
             if (d == 0.0) {
                 // Parallel to the plane: the origin's side only, or both when in the plane.
                 if (o == split) {
@@ -153,15 +159,11 @@ fn kd_trace_restart(ray: Ray) -> KdRestart {
                 break;
             }
             let split = bitcast<f32>(nodes(node * 2u + 1u));
-            let first = flags >> 2u;
             let o = ray.origin[axis];
             let d = ray.dir[axis];
-            var near = first + 1u;
-            var far = first;
-            if (o < split || (o == split && d <= 0.0)) {
-                near = first;
-                far = first + 1u;
-            }
+            let children = kd_children(flags, o, split, d);
+            let near = children.x;
+            let far = children.y;
             let t_split = (split - o) * inv[axis];
             let tie = abs(t_split - t_near) <= KD_RESTART_TIE * t_near || abs(t_split - t_far) <= KD_RESTART_TIE * t_far;
             if (d == 0.0 || t_split != t_split) {
