@@ -99,7 +99,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "kdtree",
         family: "triangle",
         summary: "SAH kd-tree (Wald & Havran 2006): O(N log N) event sweep, perfect splits, 8-byte nodes, \
-                  front-to-back stack traversal",
+                  front-to-back stack traversal or kd-restart (kdtree.traversal=restart)",
         params: &structures::kdtree::KdParams::KEYS,
         check: |p| structures::kdtree::KdParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::kdtree::KdTree::build(input)?)),
