@@ -49,6 +49,26 @@ fn crossing(n: &KdNode, origin: &[f32; 3], dir: &[f32; 3]) -> Crossing {
     Crossing { axis, o, split, near, far }
 }
 
+/// Tests a leaf's triangles, keeping the nearest hit (`t`, triangle) in `best`.
+#[inline(always)]
+fn test_leaf<S: Stats>(
+    tree: &KdTree,
+    leaf: &KdNode,
+    ray: &ShearedRay,
+    t_min: f32,
+    best: (&mut f32, &mut u32),
+    stats: &mut S,
+) {
+    let (best_t, best_prim) = best;
+    for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
+        stats.prim_test();
+        if let Some(t) = ray.intersect(&tree.triangles[r as usize], t_min, *best_t) {
+            *best_t = t;
+            *best_prim = r;
+        }
+    }
+}
+
 fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     let origin = ray.origin.to_array();
     let dir = ray.dir.to_array();
@@ -94,14 +114,7 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
             }
         }
         // LEAF: its triangles, nearest hit kept.
-        let leaf = &tree.nodes[node];
-        for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
-            stats.prim_test();
-            if let Some(t) = sheared.intersect(&tree.triangles[r as usize], t_min, best_t) {
-                best_t = t;
-                best_prim = r;
-            }
-        }
+        test_leaf(tree, &tree.nodes[node], &sheared, t_min, (&mut best_t, &mut best_prim), stats);
         // POP the next far child the ray reaches before the best hit. (No early exit on a hit
         // inside this cell: a ray in a split plane pushed its far child with this very interval,
         // and a hit within the margin of the plane may yet be beaten across it.)
@@ -179,14 +192,7 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
                 t_far = t_split;
             }
         }
-        let leaf = &tree.nodes[node];
-        for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
-            stats.prim_test();
-            if let Some(t) = sheared.intersect(&tree.triangles[r as usize], t_min, best_t) {
-                best_t = t;
-                best_prim = r;
-            }
-        }
+        test_leaf(tree, &tree.nodes[node], &sheared, t_min, (&mut best_t, &mut best_prim), stats);
         // A hit before this leaf's exit (by more than the margin) is the nearest: every later
         // leaf starts at or after the exit. Otherwise RESTART past the leaf.
         if best_t < t_far * (1.0 - MARGIN) || t_far >= t_exit {
