@@ -30,6 +30,20 @@ fn kd_children(flags: u32, o: f32, split: f32, d: f32) -> vec2<u32> {
     return vec2<u32>(first + 1u, first);
 }
 
+// A leaf's triangles (its node words `flags`, `data`), the nearest hit kept in best_t/best_prim
+// (cpu::kdtree's test_leaf).
+fn kd_test_leaf(sheared: ShearedRay, flags: u32, data: u32, t_min: f32, best_t: ptr<function, f32>, best_prim: ptr<function, u32>) {
+    let count = flags >> 2u;
+    for (var k = data; k < data + count; k++) {
+        let prim = refs(k);
+        let t = intersect_triangle(sheared, prim, t_min, *best_t);
+        if (t < *best_t) {
+            *best_t = t;
+            *best_prim = prim;
+        }
+    }
+}
+
 fn kd_trace_stack(ray: Ray) -> TraceResult {
     let inv = reciprocal(ray.dir);
     let lo = vec3<f32>(bitcast<f32>(bounds(0u)), bitcast<f32>(bounds(1u)), bitcast<f32>(bounds(2u)));
@@ -87,15 +101,7 @@ fn kd_trace_stack(ray: Ray) -> TraceResult {
             continue;
         }
         // LEAF: its triangles, nearest hit kept.
-        let count = flags >> 2u;
-        for (var k = data; k < data + count; k++) {
-            let prim = refs(k);
-            let t = intersect_triangle(sheared, prim, t_min, best_t);
-            if (t < best_t) {
-                best_t = t;
-                best_prim = prim;
-            }
-        }
+        kd_test_leaf(sheared, flags, data, t_min, &best_t, &best_prim);
         // POP the next far child the ray reaches before the best hit.
         var popped = false;
         while (sp > 0u) {
@@ -113,10 +119,7 @@ fn kd_trace_stack(ray: Ray) -> TraceResult {
             break;
         }
     }
-    if (best_prim == NO_PRIM) {
-        return no_hit();
-    }
-    return TraceResult(true, best_t, best_prim, 0u);
+    return triangle_result(best_t, best_prim);
 }
 
 // kd-restart (cpu::kdtree's trace_restart, step for step): no stack; the ray descends to the leaf
@@ -184,27 +187,14 @@ fn kd_trace_restart(ray: Ray) -> KdRestart {
             }
         }
         // LEAF: its triangles, nearest hit kept.
-        let flags = nodes(node * 2u);
-        let data = nodes(node * 2u + 1u);
-        let count = flags >> 2u;
-        for (var k = data; k < data + count; k++) {
-            let prim = refs(k);
-            let t = intersect_triangle(sheared, prim, ray.t_min, best_t);
-            if (t < best_t) {
-                best_t = t;
-                best_prim = prim;
-            }
-        }
+        kd_test_leaf(sheared, nodes(node * 2u), nodes(node * 2u + 1u), ray.t_min, &best_t, &best_prim);
         if (best_t < t_far * (1.0 - KD_MARGIN) || t_far >= t_exit) {
             break;
         }
         t_start = t_far;
         start_plane = exit_plane;
     }
-    if (best_prim == NO_PRIM) {
-        return KdRestart(false, no_hit());
-    }
-    return KdRestart(false, TraceResult(true, best_t, best_prim, 0u));
+    return KdRestart(false, triangle_result(best_t, best_prim));
 }
 
 fn trace(ray: Ray, index: u32) -> TraceResult {

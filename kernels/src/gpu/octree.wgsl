@@ -179,8 +179,5 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
             sp += 1u;
         }
     }
-    if (best_prim == NO_PRIM) {
-        return no_hit();
-    }
-    return TraceResult(true, best_t, best_prim, 0u);
+    return triangle_result(best_t, best_prim);
 }

@@ -84,3 +84,12 @@ fn intersect_triangle(r: ShearedRay, tri: u32, t_min: f32, t_max: f32) -> f32 {
     }
     return t_max;
 }
+
+// The result of a triangle kernel: the nearest hit (best_t, triangle best_prim), or a miss when no
+// triangle was hit (best_prim == NO_PRIM).
+fn triangle_result(best_t: f32, best_prim: u32) -> TraceResult {
+    if (best_prim == NO_PRIM) {
+        return no_hit();
+    }
+    return TraceResult(true, best_t, best_prim, 0u);
+}
