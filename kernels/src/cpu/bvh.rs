@@ -5,7 +5,7 @@ use scenes::{Camera, Ray};
 use structures::bvh::{Bvh, BvhNode, MAX_DEPTH};
 
 use super::slab;
-use super::triangle::{ShearedRay, geometric_normal};
+use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -100,11 +100,7 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
             }
         }
     }
-    (best_prim != u32::MAX).then(|| Hit {
-        t: best_t,
-        normal: geometric_normal(&bvh.triangles[best_prim as usize]),
-        prim: u64::from(best_prim),
-    })
+    nearest_hit(&bvh.triangles, best_t, best_prim)
 }
 
 impl Traverse for Bvh {

@@ -40,7 +40,7 @@ use scenes::{Camera, Ray};
 use structures::grid::{BRICK_SHIFT, Grid, GridHeader, SUBGRID_BIT};
 
 use super::slab;
-use super::triangle::{ShearedRay, geometric_normal};
+use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -330,11 +330,7 @@ fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S
             }
         }
     }
-    (best_prim != u32::MAX).then(|| Hit {
-        t: best_t,
-        normal: geometric_normal(&grid.triangles[best_prim as usize]),
-        prim: u64::from(best_prim),
-    })
+    nearest_hit(&grid.triangles, best_t, best_prim)
 }
 
 impl Traverse for Grid {

@@ -23,7 +23,7 @@ use scenes::{Camera, Ray};
 use structures::kdtree::{KdNode, KdTraversal, KdTree, MAX_DEPTH};
 
 use super::slab;
-use super::triangle::{ShearedRay, geometric_normal};
+use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -131,11 +131,7 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
             }
         }
     }
-    (best_prim != u32::MAX).then(|| Hit {
-        t: best_t,
-        normal: geometric_normal(&tree.triangles[best_prim as usize]),
-        prim: u64::from(best_prim),
-    })
+    nearest_hit(&tree.triangles, best_t, best_prim)
 }
 
 /// Two plane crossings closer than this (relative) may be in either order: each `t` is
@@ -201,11 +197,7 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
         t_start = t_far;
         start_plane = exit_plane;
     }
-    Some((best_prim != u32::MAX).then(|| Hit {
-        t: best_t,
-        normal: geometric_normal(&tree.triangles[best_prim as usize]),
-        prim: u64::from(best_prim),
-    }))
+    Some(nearest_hit(&tree.triangles, best_t, best_prim))
 }
 
 fn trace_any<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {

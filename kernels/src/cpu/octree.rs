@@ -24,7 +24,7 @@ use structures::octree::{MAX_DEPTH, TriOctree, layout};
 
 use super::kdtree::MARGIN;
 use super::slab;
-use super::triangle::{ShearedRay, geometric_normal};
+use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
 
@@ -176,11 +176,7 @@ fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &
             }
         }
     }
-    (best_prim != u32::MAX).then(|| Hit {
-        t: best_t,
-        normal: geometric_normal(&tree.triangles[best_prim as usize]),
-        prim: u64::from(best_prim),
-    })
+    nearest_hit(&tree.triangles, best_t, best_prim)
 }
 
 impl Traverse for TriOctree {

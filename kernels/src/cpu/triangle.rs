@@ -11,6 +11,8 @@
 use glam::Vec3;
 use scenes::{Ray, Triangle};
 
+use crate::Hit;
+
 /// A ray prepared for the watertight test: the dominant axis `kz`, the two others, and the shear.
 #[derive(Clone, Copy, Debug)]
 pub struct ShearedRay {
@@ -101,6 +103,12 @@ impl ShearedRay {
 
 /// The unit geometric normal `(v1 − v0) × (v2 − v0)` of a triangle.
 #[inline]
+/// The nearest hit a triangle kernel found: `t` and the triangle `prim` of `triangles`, or a miss
+/// when `prim` is `u32::MAX` (no triangle was hit). WGSL twin: `triangle.wgsl`'s `triangle_result`.
+pub fn nearest_hit(triangles: &[Triangle], t: f32, prim: u32) -> Option<Hit> {
+    (prim != u32::MAX).then(|| Hit { t, normal: geometric_normal(&triangles[prim as usize]), prim: u64::from(prim) })
+}
+
 pub fn geometric_normal(tri: &Triangle) -> Vec3 {
     (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero()
 }
