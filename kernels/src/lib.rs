@@ -3,6 +3,7 @@
 //! | structure | CPU kernel | WGSL kernel |
 //! |---|---|---|
 //! | `bvh` | [`cpu::bvh`] | `gpu/bvh.wgsl` |
+//! | `bvh4` | [`cpu::bvh4`] (4-lane SSE over [`cpu::lanes`], or the scalar tests) | — |
 //! | `ug`, `rg`, `rg2`, `org` | [`cpu::grid`] | `gpu/grid.wgsl` |
 //! | `svo-naive` | [`cpu::svo_naive`] | `gpu/svo_naive.wgsl` |
 //! | `svo` | [`cpu::svo`] (over [`cpu::octree_cast`]) | `gpu/svo.wgsl` (over `gpu/octree_cast.wgsl`) |

@@ -42,6 +42,19 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
     StructureEntry {
+        name: "bvh4",
+        family: "triangle",
+        summary: "the reference BVH collapsed to 4-wide nodes, 4-triangle blocks, SSE traversal bit for bit the \
+                  scalar tests' (simd=auto|scalar|sse4)",
+        params: &["bvh.preset", "simd"],
+        check: |p| {
+            bvh_preset_check(p)?;
+            structures::simd::SimdChoice::from_params(p)?.resolve(&structures::bvh4::build::SUPPORTED).map(drop)
+        },
+        build: |input| Ok(Box::new(structures::bvh4::Bvh4::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
         name: "obvhs",
         family: "triangle",
         summary: "the obvhs crate as shipped: its PLOC BVH2 (same build as bvh), its traversal and Möller–Trumbore test",

@@ -8,6 +8,7 @@
 //! | module | structure | spec |
 //! |---|---|---|
 //! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
+//! | [`bvh4`] | the reference BVH collapsed to 4-wide nodes, 4-triangle blocks (SIMD) | issue 30 |
 //! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
 //! | [`kdtree`] | SAH kd-tree (Wald & Havran 2006), 8-byte nodes | seed 002, issue 29 |
 //! | [`octree`] | octree over triangles, breadth-first child/leaf masks | seed 002, issue 29 |
@@ -25,6 +26,7 @@
 
 pub mod brickmap;
 pub mod bvh;
+pub mod bvh4;
 pub mod embree;
 pub mod esvo;
 pub mod grid;
@@ -34,6 +36,7 @@ pub mod memory;
 pub mod obvhs;
 pub mod octree;
 pub mod params;
+pub mod simd;
 pub mod svdag;
 pub mod svo;
 pub mod svo_naive;

@@ -14,7 +14,7 @@ use crate::{Counters, Hit, NoStats, Stats, Traverse};
 /// distance; without the margin, a nearer-by-a-few-ulps triangle in another leaf would be culled
 /// and the result would differ from brute force on the same triangle test. Costs nothing
 /// measurable: only boxes starting within 0.012 % of the hit distance are affected.
-const CULL_MARGIN: f32 = 1.0 + 1.0 / 8192.0;
+pub(crate) const CULL_MARGIN: f32 = 1.0 + 1.0 / 8192.0;
 
 /// A ray prepared for slab tests against BVH nodes.
 struct SlabRay {

@@ -4,10 +4,12 @@
 pub mod brickmap;
 pub mod brute_force;
 pub mod bvh;
+pub mod bvh4;
 pub mod embree;
 pub mod esvo;
 pub mod grid;
 pub mod kdtree;
+pub mod lanes;
 pub mod obvhs;
 pub mod octree;
 pub mod octree_cast;

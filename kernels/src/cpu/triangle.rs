@@ -16,13 +16,13 @@ use crate::Hit;
 /// A ray prepared for the watertight test: the dominant axis `kz`, the two others, and the shear.
 #[derive(Clone, Copy, Debug)]
 pub struct ShearedRay {
-    origin: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(crate) origin: Vec3,
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
 }
 
 impl ShearedRay {
@@ -101,14 +101,14 @@ impl ShearedRay {
     }
 }
 
-/// The unit geometric normal `(v1 − v0) × (v2 − v0)` of a triangle.
-#[inline]
 /// The nearest hit a triangle kernel found: `t` and the triangle `prim` of `triangles`, or a miss
 /// when `prim` is `u32::MAX` (no triangle was hit). WGSL twin: `triangle.wgsl`'s `triangle_result`.
 pub fn nearest_hit(triangles: &[Triangle], t: f32, prim: u32) -> Option<Hit> {
     (prim != u32::MAX).then(|| Hit { t, normal: geometric_normal(&triangles[prim as usize]), prim: u64::from(prim) })
 }
 
+/// The unit geometric normal `(v1 − v0) × (v2 − v0)` of a triangle.
+#[inline]
 pub fn geometric_normal(tri: &Triangle) -> Vec3 {
     (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero()
 }

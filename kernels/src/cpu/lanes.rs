@@ -1,0 +1,162 @@
+//! The SIMD layer of the CPU kernels (issue 30): 4-lane `f32` vectors and masks over `std::arch`
+//! SSE, with exactly the IEEE semantics of the scalar code they stand in for.
+//!
+//! Bit-identical to the scalar kernels by construction (`../shared/research/simd_parity.md` §4):
+//! - only `+ − × ÷` and comparisons, each correctly rounded in IEEE single precision as the
+//!   scalar operations are; no fused multiply-add (Rust never contracts `a * b + c` either), no
+//!   approximate reciprocal;
+//! - [`F32x4::max_sel`] / [`F32x4::min_sel`] are `maxps` / `minps`, which return their *second*
+//!   operand when the first does not compare greater (less): `a.max_sel(b)` is the scalar
+//!   `if a > b { a } else { b }` lane by lane, NaN and ±0 included (`f32::max` is not: it drops a
+//!   NaN and may return either zero).
+//!
+//! SSE and SSE2 are part of every x86-64 CPU (the target's baseline features, checked at compile
+//! time below), so these operations are sound anywhere on that target; a kernel enables SSE4.1
+//! for its whole traversal with `#[target_feature]` only after run-time detection
+//! (`structures::simd`). Other targets have no SIMD path: their kernels
+//! run the scalar tests (`simd=scalar`, which `auto` picks there).
+
+#[cfg(target_arch = "x86_64")]
+pub use sse::{F32x4, M32x4};
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod sse {
+    //! SAFETY (every `unsafe` block of this module): each calls one SSE or SSE2 intrinsic on
+    //! values (no pointers). Those intrinsics are unsafe to call only because they need their
+    //! target feature, and SSE2 (which implies SSE) is enabled for every x86-64 target, as the
+    //! assertion below checks at compile time. Exercised by this module's tests.
+    use std::arch::x86_64::*;
+
+    const _: () = assert!(cfg!(target_feature = "sse2"), "x86-64 always has SSE2");
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+
+    /// Four `f32` lanes.
+    #[derive(Clone, Copy, Debug)]
+    #[repr(transparent)]
+    pub struct F32x4(__m128);
+
+    /// Four lane masks (all ones or all zeros per lane), the result of a comparison.
+    #[derive(Clone, Copy, Debug)]
+    #[repr(transparent)]
+    pub struct M32x4(__m128);
+
+    impl F32x4 {
+        #[inline(always)]
+        pub fn load(lanes: &[f32; 4]) -> Self {
+            Self(bytemuck::cast(*lanes))
+        }
+
+        #[inline(always)]
+        pub fn splat(x: f32) -> Self {
+            Self(unsafe { _mm_set1_ps(x) })
+        }
+
+        #[inline(always)]
+        pub fn to_array(self) -> [f32; 4] {
+            bytemuck::cast(self.0)
+        }
+
+        /// `if self > other { self } else { other }` per lane (`maxps`).
+        #[inline(always)]
+        pub fn max_sel(self, other: Self) -> Self {
+            Self(unsafe { _mm_max_ps(self.0, other.0) })
+        }
+
+        /// `if self < other { self } else { other }` per lane (`minps`).
+        #[inline(always)]
+        pub fn min_sel(self, other: Self) -> Self {
+            Self(unsafe { _mm_min_ps(self.0, other.0) })
+        }
+
+        #[inline(always)]
+        pub fn lt(self, other: Self) -> M32x4 {
+            M32x4(unsafe { _mm_cmplt_ps(self.0, other.0) })
+        }
+
+        #[inline(always)]
+        pub fn le(self, other: Self) -> M32x4 {
+            M32x4(unsafe { _mm_cmple_ps(self.0, other.0) })
+        }
+
+        #[inline(always)]
+        pub fn gt(self, other: Self) -> M32x4 {
+            M32x4(unsafe { _mm_cmpgt_ps(self.0, other.0) })
+        }
+
+        #[inline(always)]
+        pub fn eq(self, other: Self) -> M32x4 {
+            M32x4(unsafe { _mm_cmpeq_ps(self.0, other.0) })
+        }
+
+        /// `if self != other` per lane; true where either is NaN, as the scalar `!=` is.
+        #[inline(always)]
+        pub fn ne(self, other: Self) -> M32x4 {
+            M32x4(unsafe { _mm_cmpneq_ps(self.0, other.0) })
+        }
+    }
+
+    impl M32x4 {
+        /// One bit per lane, lane 0 lowest.
+        #[inline(always)]
+        pub fn bits(self) -> u32 {
+            unsafe { _mm_movemask_ps(self.0) as u32 }
+        }
+    }
+
+    macro_rules! binary {
+        ($ty:ident, $trait:ident, $method:ident, $intrinsic:ident) => {
+            impl $trait for $ty {
+                type Output = $ty;
+                #[inline(always)]
+                fn $method(self, other: $ty) -> $ty {
+                    $ty(unsafe { $intrinsic(self.0, other.0) })
+                }
+            }
+        };
+    }
+
+    binary!(F32x4, Add, add, _mm_add_ps);
+    binary!(F32x4, Sub, sub, _mm_sub_ps);
+    binary!(F32x4, Mul, mul, _mm_mul_ps);
+    binary!(F32x4, Div, div, _mm_div_ps);
+    binary!(M32x4, BitAnd, bitand, _mm_and_ps);
+    binary!(M32x4, BitOr, bitor, _mm_or_ps);
+
+    impl Not for M32x4 {
+        type Output = M32x4;
+        #[inline(always)]
+        fn not(self) -> M32x4 {
+            M32x4(unsafe { _mm_xor_ps(self.0, _mm_castsi128_ps(_mm_set1_epi32(-1))) })
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        /// Every lane operation against the scalar expression it stands for, over values that
+        /// include NaN, ±0, ±∞ and denormals, bit for bit.
+        #[test]
+        fn lanes_are_the_scalar_operations_bit_for_bit() {
+            let specials = [0.0, -0.0, 1.0, -1.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-40, -3e38, 0.1];
+            for &a in &specials {
+                for &b in &specials {
+                    let (va, vb) = (F32x4::splat(a), F32x4::splat(b));
+                    let same = |v: F32x4, s: f32| v.to_array().iter().all(|x| x.to_bits() == s.to_bits());
+                    assert!(same(va + vb, a + b) && same(va - vb, a - b), "{a} {b}");
+                    assert!(same(va * vb, a * b) && same(va / vb, a / b), "{a} {b}");
+                    assert!(same(va.max_sel(vb), if a > b { a } else { b }), "max {a} {b}");
+                    assert!(same(va.min_sel(vb), if a < b { a } else { b }), "min {a} {b}");
+                    let bit = |m: M32x4, s: bool| m.bits() == if s { 0b1111 } else { 0 };
+                    assert!(bit(va.lt(vb), a < b) && bit(va.le(vb), a <= b) && bit(va.gt(vb), a > b), "{a} {b}");
+                    assert!(bit(va.eq(vb), a == b) && bit(va.ne(vb), a != b) && bit(!va.eq(vb), a != b), "{a} {b}");
+                }
+            }
+            let v = F32x4::load(&[1.0, 2.0, 3.0, 4.0]);
+            assert_eq!(v.lt(F32x4::splat(2.5)).bits(), 0b0011, "lane 0 is the lowest bit");
+            assert_eq!((v.gt(F32x4::splat(1.5)) & v.lt(F32x4::splat(3.5))).bits(), 0b0110);
+            assert_eq!((v.lt(F32x4::splat(1.5)) | v.gt(F32x4::splat(3.5))).bits(), 0b1001);
+        }
+    }
+}

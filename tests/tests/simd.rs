@@ -1,0 +1,166 @@
+//! The 4-wide BVH and its SIMD kernel (issue 30): exact against brute force on every built-in
+//! scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
+//! and its SIMD path bit for bit its scalar form (hits, normals and every counter) on every
+//! instruction set this machine has, forced one after another.
+
+use kernels::cpu::brute_force;
+use kernels::{Counters, Hit, Traverse};
+use rayon::prelude::*;
+use scenes::{Camera, Ray, Scene, Triangle};
+use structures::bvh4::Bvh4;
+use structures::bvh4::layout::{EMPTY, NO_PRIM, leaf_blocks};
+use structures::simd::Isa;
+use structures::{BuildInput, Params};
+use tests::ray_set;
+
+const RAYS_PER_SCENE: usize = 10_002;
+
+fn build(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> Bvh4 {
+    let params = Params::default();
+    let bvh = Bvh4::build(&BuildInput { scene, triangles, params: &params }).expect("bvh4 builds");
+    bvh.validate().unwrap_or_else(|e| panic!("{}: invalid bvh4: {e}", scene.name));
+    bvh
+}
+
+/// `(t bits, prim)` of a hit, so hits compare bit for bit.
+fn key(hit: Option<Hit>) -> Option<(u32, u64)> {
+    hit.map(|h| (h.t.to_bits(), h.prim))
+}
+
+/// Every ray's hit equals brute force's (`brute_force::intersect`: the nearest `t`, the lowest
+/// index among equal ones) exactly. Returns the rays that hit.
+fn assert_brute_force(bvh: &Bvh4, triangles: &[Triangle], rays: &[Ray], what: &str) -> usize {
+    let wrong: Vec<(usize, Option<(u32, u64)>, Option<(u32, u64)>)> = rays
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, ray)| {
+            let got = key(bvh.intersect(ray, 0.0, f32::INFINITY));
+            let want = key(brute_force::intersect(triangles, ray, 0.0, f32::INFINITY));
+            (got != want).then_some((i, got, want))
+        })
+        .collect();
+    assert!(wrong.is_empty(), "{what}: {} of {} rays differ from brute force; first {:?}", wrong.len(), rays.len(), &wrong[..wrong.len().min(3)]);
+    rays.iter().filter(|r| bvh.intersect(r, 0.0, f32::INFINITY).is_some()).count()
+}
+
+/// Every SIMD instruction set the kernel has and this CPU runs.
+fn simd_sets() -> Vec<Isa> {
+    structures::bvh4::build::SUPPORTED.into_iter().filter(|&i| i != Isa::Scalar && i.available()).collect()
+}
+
+/// The SIMD paths against the scalar one on `rays`: hit, normal and counters per ray, bit for bit.
+fn assert_simd_is_scalar(bvh: &mut Bvh4, rays: &[Ray], what: &str) {
+    let trace = |bvh: &Bvh4| -> Vec<(Option<(u32, u64, [u32; 3])>, Counters)> {
+        rays.par_iter()
+            .map(|ray| {
+                let mut c = Counters::default();
+                let hit = bvh.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
+                assert_eq!(key(hit), key(bvh.intersect(ray, 0.0, f32::INFINITY)), "{what}: counted and timed paths agree");
+                (hit.map(|h| (h.t.to_bits(), h.prim, h.normal.to_array().map(f32::to_bits))), c)
+            })
+            .collect()
+    };
+    bvh.set_isa(Isa::Scalar).expect("scalar runs everywhere");
+    let scalar = trace(bvh);
+    for isa in simd_sets() {
+        bvh.set_isa(isa).expect("detected");
+        let simd = trace(bvh);
+        let differ = scalar.iter().zip(&simd).filter(|(a, b)| a != b).count();
+        let first = scalar.iter().zip(&simd).position(|(a, b)| a != b);
+        assert_eq!(differ, 0, "{what}: {} differs from scalar on {differ} of {} rays; first {first:?}", isa.name(), rays.len());
+    }
+}
+
+fn check_scene(name: &str) {
+    let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
+    let triangles = scene.triangles();
+    let mut bvh = build(&scene, triangles.clone());
+    let rays: Vec<Ray> = ray_set(&scene, &triangles, RAYS_PER_SCENE, 0x51AD ^ name.len() as u64).iter().map(|r| r.ray).collect();
+    let hits = assert_brute_force(&bvh, &triangles, &rays, name);
+    assert!(hits > rays.len() / 10, "{name}: only {hits} of {} rays hit", rays.len());
+    let camera = Camera::new(scene.camera_spec(), 160, 160);
+    let primary: Vec<Ray> = (0..160 * 160).map(|i| camera.ray(i % 160, i / 160)).collect();
+    assert_simd_is_scalar(&mut bvh, &rays, name);
+    assert_simd_is_scalar(&mut bvh, &primary, &format!("{name} primary"));
+}
+
+tests::per_builtin_scene!(check_scene);
+
+/// A stack of 300 coplanar triangles overlapping around one point, in shuffled sizes and turns:
+/// rays through the overlap hit many of them at equal `t` (the plane z = 1 is exact in f32 and
+/// axis-parallel rays make every triangle's `t` the same float), and whichever leaf the traversal
+/// opens first, the lowest index must win, as in brute force.
+#[test]
+fn equal_distances_go_to_the_smaller_triangle_index() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(30);
+    let triangles: Vec<Triangle> = (0..300)
+        .map(|_| {
+            let r = rng.random_range(0.5f32..4.0);
+            let a = rng.random_range(0.0f32..std::f32::consts::TAU);
+            let (cx, cy) = (rng.random_range(-0.4f32..0.4), rng.random_range(-0.4f32..0.4));
+            std::array::from_fn(|k| {
+                let phi = a + k as f32 * 2.1;
+                glam::Vec3::new(cx + r * phi.cos(), cy + r * phi.sin(), 1.0)
+            })
+        })
+        .collect();
+    let scene = tests::scene_of("coplanar-stack", &triangles);
+    let triangles = scene.triangles();
+    let bvh = build(&scene, triangles.clone());
+    assert!(bvh.blocks.len() > 20, "the stack spreads over many leaves: {} blocks", bvh.blocks.len());
+    let rays: Vec<Ray> = (0..4000)
+        .map(|i| {
+            let (x, y) = (rng.random_range(-0.3f32..0.3), rng.random_range(-0.3f32..0.3));
+            let dir = if i % 2 == 0 { glam::Vec3::NEG_Z } else { glam::Vec3::new(0.01 * x, 0.01 * y, -1.0) };
+            Ray::new(glam::Vec3::new(x, y, 3.0), dir)
+        })
+        .collect();
+    let ties = rays
+        .iter()
+        .filter(|r| brute_force::nearest_set(&triangles, r, 0.0, f32::INFINITY).1.len() > 1)
+        .count();
+    assert!(ties > rays.len() / 2, "only {ties} rays meet equal distances: the test is not testing ties");
+    assert_brute_force(&bvh, &triangles, &rays, "coplanar stack");
+}
+
+/// `validate` rejects each kind of corruption the kernel relies on being absent.
+#[test]
+fn validate_rejects_corruption() {
+    let scene = scenes::load_scene("teapot").expect("built in");
+    let good = build(&scene, scene.triangles());
+    let inner = good.nodes.iter().position(|n| n.child.iter().any(|&c| c != EMPTY && c & (1 << 31) == 0)).expect("an inner child");
+    let slot = good.nodes[inner].child.iter().position(|&c| c != EMPTY && c & (1 << 31) == 0).expect("slot");
+    let leaf_slot = |b: &Bvh4| {
+        b.nodes.iter().enumerate().find_map(|(i, n)| n.child.iter().position(|&c| c != EMPTY && c & (1 << 31) != 0).map(|s| (i, s)))
+    };
+    let cases: Vec<(&str, Box<dyn Fn(&mut Bvh4)>)> = vec![
+        ("child before its parent", Box::new(move |b| b.nodes[inner].child[slot] = 0)),
+        ("child out of range", Box::new(move |b| b.nodes[inner].child[slot] = b.nodes.len() as u32)),
+        ("child box shrunk", Box::new(move |b| b.nodes[inner].hi[0][slot] = b.nodes[inner].lo[0][slot])),
+        ("triangle moved", Box::new(|b| b.blocks[0].v[1][2][0] += 1.0)),
+        ("prim swapped", Box::new(|b| b.blocks[0].prim.swap(0, 1))),
+        ("empty lane with a triangle", Box::new(|b| {
+            let i = b.blocks.iter().position(|x| x.len() < 4).expect("a partial block");
+            let n = b.blocks[i].len();
+            b.blocks[i].prim[n] = 0;
+        })),
+        ("leaf out of range", Box::new(move |b| {
+            let (i, s) = leaf_slot(b).expect("a leaf");
+            b.nodes[i].child[s] = structures::bvh4::layout::leaf(b.blocks.len() as u32, 1);
+        })),
+        ("empty slot with a box", Box::new(|b| {
+            let (i, s) = b.nodes.iter().enumerate().find_map(|(i, n)| n.child.iter().position(|&c| c == EMPTY).map(|s| (i, s))).expect("an unused slot");
+            b.nodes[i].lo[0][s] = 0.0;
+        })),
+    ];
+    for (what, corrupt) in cases {
+        let mut bad = build(&scene, scene.triangles());
+        corrupt(&mut bad);
+        assert!(bad.validate().is_err(), "{what}: accepted");
+    }
+    // The leaf word decoding the kernel uses.
+    let (i, s) = leaf_slot(&good).expect("a leaf");
+    let (first, count) = leaf_blocks(good.nodes[i].child[s]);
+    assert!(first + count <= good.blocks.len() && good.blocks[first].prim[0] != NO_PRIM);
+}
