@@ -19,6 +19,9 @@ pub const MAX_STEPS: u32 = 1 << 23;
 
 /// Hooks a kernel calls as it traverses; every method is a no-op for [`NoStats`].
 pub trait Stats {
+    /// Whether the hooks count anything: a kernel skips work done only to count (a block's
+    /// occupied lanes) when they do not.
+    const COUNTING: bool;
     /// One iteration of the traversal loop.
     fn step(&mut self);
     /// One node or cell fetched.
@@ -41,6 +44,7 @@ pub trait Stats {
 pub struct NoStats;
 
 impl Stats for NoStats {
+    const COUNTING: bool = false;
     #[inline(always)]
     fn step(&mut self) {}
     #[inline(always)]
@@ -79,6 +83,7 @@ pub struct Counters {
 pub const LEVEL_STEPS: usize = 8;
 
 impl Stats for Counters {
+    const COUNTING: bool = true;
     #[inline(always)]
     fn step(&mut self) {
         self.steps += 1;

@@ -138,6 +138,7 @@ fn validate_rejects_corruption() {
         ("child before its parent", Box::new(move |b| b.nodes[inner].child[slot] = 0)),
         ("child out of range", Box::new(move |b| b.nodes[inner].child[slot] = b.nodes.len() as u32)),
         ("child box shrunk", Box::new(move |b| b.nodes[inner].hi[0][slot] = b.nodes[inner].lo[0][slot])),
+        ("depth understated", Box::new(|b| b.depth -= 1)),
         ("triangle moved", Box::new(|b| b.blocks[0].v[1][2][0] += 1.0)),
         ("prim swapped", Box::new(|b| b.blocks[0].prim.swap(0, 1))),
         ("empty lane with a triangle", Box::new(|b| {

@@ -22,9 +22,20 @@ use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
-/// Entries the traversal stack holds: at most three pushes per level of a tree no deeper than
-/// the reference BVH2 it was collapsed from (each wide level consumes at least one binary level).
-const STACK: usize = (WIDTH - 1) * structures::bvh::MAX_DEPTH + 1;
+/// Entries the traversal stack needs for a tree `depth` nodes deep: at most three pushes per
+/// level above the deepest.
+const fn stack_entries(depth: usize) -> usize {
+    (WIDTH - 1) * depth + 1
+}
+
+/// The stack of any tree: no deeper than the reference BVH2 it was collapsed from (each wide
+/// level consumes at least one binary level).
+const DEEPEST: usize = stack_entries(structures::bvh::MAX_DEPTH);
+
+/// The stack of every tree up to 21 nodes deep (every built-in scene's), a quarter of
+/// [`DEEPEST`]: the stack is zeroed per ray, and 2.3 KB of zeroing was a sixth of a primary ray's
+/// time on the dragon.
+const SHALLOW: usize = stack_entries(21);
 
 /// The two tests of a traversal step, over the four lanes of a node or a block.
 trait LaneTests {
@@ -148,6 +159,11 @@ mod sse {
             let zero = F32x4::splat(0.0);
             let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
             let outside = (u.lt(zero) | v.lt(zero) | w.lt(zero)) & (u.gt(zero) | v.gt(zero) | w.gt(zero));
+            // Most blocks a ray opens it misses in every lane: stop before the division. A lane
+            // whose `u` is NaN (an empty lane) gets no `t` in the scalar test either.
+            if (!outside & u.eq(u)).bits() | on_edge == 0 {
+                return (0, [0.0; WIDTH]);
+            }
             let det = u + v + w;
             let t = (u * (sz * az) + v * (sz * bz) + w * (sz * cz)) / det;
             let hit = !outside & det.ne(zero) & t.gt(F32x4::splat(t_min)) & t.lt(F32x4::splat(t_max));
@@ -169,7 +185,12 @@ mod sse {
     /// The traversal with SSE4.1 enabled throughout.
     #[target_feature(enable = "sse4.1")]
     pub(super) fn trace_sse4<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-        walk(bvh, &Sse::new(ray), t_min, t_max, stats)
+        let tests = Sse::new(ray);
+        if stack_entries(bvh.depth) <= SHALLOW {
+            walk::<_, _, SHALLOW>(bvh, &tests, t_min, t_max, stats)
+        } else {
+            walk::<_, _, DEEPEST>(bvh, &tests, t_min, t_max, stats)
+        }
     }
 }
 
@@ -178,7 +199,13 @@ mod sse {
 /// starts beyond the best hit (with the reference's [`CULL_MARGIN`]). The loop needs no counter:
 /// every inner child lies after its parent (`Bvh4::validate`), so no node is visited twice.
 #[inline(always)]
-fn walk<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+fn walk<T: LaneTests, S: Stats, const STACK: usize>(
+    bvh: &Bvh4,
+    tests: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
     let mut best_t = t_max;
     let mut best_prim = NO_PRIM;
     let mut cull_t = t_max;
@@ -197,7 +224,19 @@ fn walk<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: f32, s
                     cur = node.child[first];
                     continue 'traverse;
                 }
-                // Two to four children: sorted by entry, ties in slot order.
+                let rest = mask & (mask - 1);
+                if rest & (rest - 1) == 0 {
+                    // Two children, the most common case: the nearer next, the other pushed
+                    // (ties in slot order, as the sort below).
+                    let second = rest.trailing_zeros() as usize;
+                    let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
+                    stack[sp] = (node.child[far], t[far]);
+                    sp += 1;
+                    stats.push();
+                    cur = node.child[near];
+                    continue 'traverse;
+                }
+                // Three or four children: sorted by entry, ties in slot order.
                 let mut order = [(0f32, 0u32); WIDTH];
                 let mut n = 0;
                 let mut rest = mask;
@@ -224,8 +263,10 @@ fn walk<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: f32, s
         } else {
             let (first, count) = leaf_blocks(cur);
             for block in &bvh.blocks[first..first + count] {
-                for _ in 0..block.len() {
-                    stats.prim_test();
+                if S::COUNTING {
+                    for _ in 0..block.len() {
+                        stats.prim_test();
+                    }
                 }
                 // Up to the best hit inclusive once there is one: an equal `t` with a smaller
                 // triangle index still wins.
@@ -275,7 +316,8 @@ fn trace<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S)
         // Exercised by tests/tests/simd.rs on every built-in scene.
         #[cfg(target_arch = "x86_64")]
         Isa::Sse4 => unsafe { sse::trace_sse4(bvh, ray, t_min, t_max, stats) },
-        _ => walk(bvh, &Scalar::new(ray), t_min, t_max, stats),
+        _ if stack_entries(bvh.depth) <= SHALLOW => walk::<_, _, SHALLOW>(bvh, &Scalar::new(ray), t_min, t_max, stats),
+        _ => walk::<_, _, DEEPEST>(bvh, &Scalar::new(ray), t_min, t_max, stats),
     }
 }
 

@@ -7,12 +7,16 @@ impl Bvh4 {
     /// Checks that every node is reachable once, children follow their parent (what bounds the
     /// traversal loop), unused slots hold the empty box, child boxes hold what they bound, every
     /// block lane is the soup's triangle bit for bit (or an empty lane after the used ones), and
-    /// every triangle is in exactly one lane.
+    /// every triangle is in exactly one lane, and no path is deeper than `depth` (which sizes
+    /// the traversal stack).
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![0u32; self.triangles.len()];
         let mut reached = vec![false; self.nodes.len()];
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((i, level)) = stack.pop() {
+            if level > self.depth {
+                return Err(format!("node {i} lies {level} deep, below the recorded depth {}", self.depth));
+            }
             let node = self.nodes.get(i).ok_or_else(|| format!("node index {i} out of range"))?;
             if std::mem::replace(&mut reached[i], true) {
                 return Err(format!("node {i} reached twice"));
@@ -73,7 +77,7 @@ impl Bvh4 {
                             }
                         }
                     }
-                    stack.push(c);
+                    stack.push((c, level + 1));
                 }
             }
         }
