@@ -23,14 +23,22 @@ fn build(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> Bvh4 {
 }
 
 /// `(t bits, prim)` of a hit, so hits compare bit for bit.
-fn key(hit: Option<Hit>) -> Option<(u32, u64)> {
+type Key = Option<(u32, u64)>;
+
+/// A ray's hit (`t`, prim and normal as bits) and its counters.
+type Traced = (Option<(u32, u64, [u32; 3])>, Counters);
+
+/// A named corruption of a tree.
+type Corruption = (&'static str, Box<dyn Fn(&mut Bvh4)>);
+
+fn key(hit: Option<Hit>) -> Key {
     hit.map(|h| (h.t.to_bits(), h.prim))
 }
 
 /// Every ray's hit equals brute force's (`brute_force::intersect`: the nearest `t`, the lowest
 /// index among equal ones) exactly. Returns the rays that hit.
 fn assert_brute_force(bvh: &Bvh4, triangles: &[Triangle], rays: &[Ray], what: &str) -> usize {
-    let wrong: Vec<(usize, Option<(u32, u64)>, Option<(u32, u64)>)> = rays
+    let wrong: Vec<(usize, Key, Key)> = rays
         .par_iter()
         .enumerate()
         .filter_map(|(i, ray)| {
@@ -39,7 +47,13 @@ fn assert_brute_force(bvh: &Bvh4, triangles: &[Triangle], rays: &[Ray], what: &s
             (got != want).then_some((i, got, want))
         })
         .collect();
-    assert!(wrong.is_empty(), "{what}: {} of {} rays differ from brute force; first {:?}", wrong.len(), rays.len(), &wrong[..wrong.len().min(3)]);
+    assert!(
+        wrong.is_empty(),
+        "{what}: {} of {} rays differ from brute force; first {:?}",
+        wrong.len(),
+        rays.len(),
+        &wrong[..wrong.len().min(3)]
+    );
     rays.iter().filter(|r| bvh.intersect(r, 0.0, f32::INFINITY).is_some()).count()
 }
 
@@ -50,12 +64,16 @@ fn simd_sets() -> Vec<Isa> {
 
 /// The SIMD paths against the scalar one on `rays`: hit, normal and counters per ray, bit for bit.
 fn assert_simd_is_scalar(bvh: &mut Bvh4, rays: &[Ray], what: &str) {
-    let trace = |bvh: &Bvh4| -> Vec<(Option<(u32, u64, [u32; 3])>, Counters)> {
+    let trace = |bvh: &Bvh4| -> Vec<Traced> {
         rays.par_iter()
             .map(|ray| {
                 let mut c = Counters::default();
                 let hit = bvh.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
-                assert_eq!(key(hit), key(bvh.intersect(ray, 0.0, f32::INFINITY)), "{what}: counted and timed paths agree");
+                assert_eq!(
+                    key(hit),
+                    key(bvh.intersect(ray, 0.0, f32::INFINITY)),
+                    "{what}: counted and timed paths agree"
+                );
                 (hit.map(|h| (h.t.to_bits(), h.prim, h.normal.to_array().map(f32::to_bits))), c)
             })
             .collect()
@@ -67,7 +85,13 @@ fn assert_simd_is_scalar(bvh: &mut Bvh4, rays: &[Ray], what: &str) {
         let simd = trace(bvh);
         let differ = scalar.iter().zip(&simd).filter(|(a, b)| a != b).count();
         let first = scalar.iter().zip(&simd).position(|(a, b)| a != b);
-        assert_eq!(differ, 0, "{what}: {} differs from scalar on {differ} of {} rays; first {first:?}", isa.name(), rays.len());
+        assert_eq!(
+            differ,
+            0,
+            "{what}: {} differs from scalar on {differ} of {} rays; first {first:?}",
+            isa.name(),
+            rays.len()
+        );
     }
 }
 
@@ -75,7 +99,8 @@ fn check_scene(name: &str) {
     let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
     let triangles = scene.triangles();
     let mut bvh = build(&scene, triangles.clone());
-    let rays: Vec<Ray> = ray_set(&scene, &triangles, RAYS_PER_SCENE, 0x51AD ^ name.len() as u64).iter().map(|r| r.ray).collect();
+    let rays: Vec<Ray> =
+        ray_set(&scene, &triangles, RAYS_PER_SCENE, 0x51AD ^ name.len() as u64).iter().map(|r| r.ray).collect();
     let hits = assert_brute_force(&bvh, &triangles, &rays, name);
     assert!(hits > rays.len() / 10, "{name}: only {hits} of {} rays hit", rays.len());
     let camera = Camera::new(scene.camera_spec(), 160, 160);
@@ -116,10 +141,7 @@ fn equal_distances_go_to_the_smaller_triangle_index() {
             Ray::new(glam::Vec3::new(x, y, 3.0), dir)
         })
         .collect();
-    let ties = rays
-        .iter()
-        .filter(|r| brute_force::nearest_set(&triangles, r, 0.0, f32::INFINITY).1.len() > 1)
-        .count();
+    let ties = rays.iter().filter(|r| brute_force::nearest_set(&triangles, r, 0.0, f32::INFINITY).1.len() > 1).count();
     assert!(ties > rays.len() / 2, "only {ties} rays meet equal distances: the test is not testing ties");
     assert_brute_force(&bvh, &triangles, &rays, "coplanar stack");
 }
@@ -129,31 +151,52 @@ fn equal_distances_go_to_the_smaller_triangle_index() {
 fn validate_rejects_corruption() {
     let scene = scenes::load_scene("teapot").expect("built in");
     let good = build(&scene, scene.triangles());
-    let inner = good.nodes.iter().position(|n| n.child.iter().any(|&c| c != EMPTY && c & (1 << 31) == 0)).expect("an inner child");
+    let inner = good
+        .nodes
+        .iter()
+        .position(|n| n.child.iter().any(|&c| c != EMPTY && c & (1 << 31) == 0))
+        .expect("an inner child");
     let slot = good.nodes[inner].child.iter().position(|&c| c != EMPTY && c & (1 << 31) == 0).expect("slot");
     let leaf_slot = |b: &Bvh4| {
-        b.nodes.iter().enumerate().find_map(|(i, n)| n.child.iter().position(|&c| c != EMPTY && c & (1 << 31) != 0).map(|s| (i, s)))
+        b.nodes
+            .iter()
+            .enumerate()
+            .find_map(|(i, n)| n.child.iter().position(|&c| c != EMPTY && c & (1 << 31) != 0).map(|s| (i, s)))
     };
-    let cases: Vec<(&str, Box<dyn Fn(&mut Bvh4)>)> = vec![
+    let cases: Vec<Corruption> = vec![
         ("child before its parent", Box::new(move |b| b.nodes[inner].child[slot] = 0)),
         ("child out of range", Box::new(move |b| b.nodes[inner].child[slot] = b.nodes.len() as u32)),
         ("child box shrunk", Box::new(move |b| b.nodes[inner].hi[0][slot] = b.nodes[inner].lo[0][slot])),
         ("depth understated", Box::new(|b| b.depth -= 1)),
         ("triangle moved", Box::new(|b| b.blocks[0].v[1][2][0] += 1.0)),
         ("prim swapped", Box::new(|b| b.blocks[0].prim.swap(0, 1))),
-        ("empty lane with a triangle", Box::new(|b| {
-            let i = b.blocks.iter().position(|x| x.len() < 4).expect("a partial block");
-            let n = b.blocks[i].len();
-            b.blocks[i].prim[n] = 0;
-        })),
-        ("leaf out of range", Box::new(move |b| {
-            let (i, s) = leaf_slot(b).expect("a leaf");
-            b.nodes[i].child[s] = structures::bvh4::layout::leaf(b.blocks.len() as u32, 1);
-        })),
-        ("empty slot with a box", Box::new(|b| {
-            let (i, s) = b.nodes.iter().enumerate().find_map(|(i, n)| n.child.iter().position(|&c| c == EMPTY).map(|s| (i, s))).expect("an unused slot");
-            b.nodes[i].lo[0][s] = 0.0;
-        })),
+        (
+            "empty lane with a triangle",
+            Box::new(|b| {
+                let i = b.blocks.iter().position(|x| x.len() < 4).expect("a partial block");
+                let n = b.blocks[i].len();
+                b.blocks[i].prim[n] = 0;
+            }),
+        ),
+        (
+            "leaf out of range",
+            Box::new(move |b| {
+                let (i, s) = leaf_slot(b).expect("a leaf");
+                b.nodes[i].child[s] = structures::bvh4::layout::leaf(b.blocks.len() as u32, 1);
+            }),
+        ),
+        (
+            "empty slot with a box",
+            Box::new(|b| {
+                let (i, s) = b
+                    .nodes
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, n)| n.child.iter().position(|&c| c == EMPTY).map(|s| (i, s)))
+                    .expect("an unused slot");
+                b.nodes[i].lo[0][s] = 0.0;
+            }),
+        ),
     ];
     for (what, corrupt) in cases {
         let mut bad = build(&scene, scene.triangles());

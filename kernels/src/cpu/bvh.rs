@@ -86,21 +86,28 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
                 (None, None) => {}
             }
         }
-        // Pop the next subtree that can still hold a nearer hit.
-        loop {
-            if sp == 0 {
-                break 'traverse;
-            }
-            sp -= 1;
-            stats.pop();
-            let (next, t_entry) = stack[sp];
-            if t_entry <= cull_t {
-                node = next as usize;
-                continue 'traverse;
-            }
+        match pop_nearer(&stack, &mut sp, cull_t, stats) {
+            Some(next) => node = next as usize,
+            None => break 'traverse,
         }
     }
     nearest_hit(&bvh.triangles, best_t, best_prim)
+}
+
+/// Pops the next subtree of an ordered traversal's stack of `(subtree, entry t)` that can still
+/// hold a hit nearer than `cull_t`, skipping those entered beyond it; `None` when none is left.
+/// Shared by the binary and the 4-wide BVH kernels.
+#[inline(always)]
+pub(crate) fn pop_nearer<S: Stats>(stack: &[(u32, f32)], sp: &mut usize, cull_t: f32, stats: &mut S) -> Option<u32> {
+    while *sp > 0 {
+        *sp -= 1;
+        stats.pop();
+        let (next, t_entry) = stack[*sp];
+        if t_entry <= cull_t {
+            return Some(next);
+        }
+    }
+    None
 }
 
 impl Traverse for Bvh {

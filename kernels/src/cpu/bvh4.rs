@@ -12,11 +12,11 @@
 //! as it does in brute force (which tests triangles in index order and keeps the first nearest).
 
 use scenes::{Camera, Ray};
-use structures::bvh4::layout::{Bvh4Node, NO_PRIM, Tri4, WIDTH, is_leaf, leaf_blocks};
 use structures::bvh4::Bvh4;
+use structures::bvh4::layout::{Bvh4Node, NO_PRIM, Tri4, WIDTH, is_leaf, leaf_blocks};
 use structures::simd::Isa;
 
-use super::bvh::CULL_MARGIN;
+use super::bvh::{CULL_MARGIN, pop_nearer};
 use super::slab;
 use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
@@ -63,11 +63,11 @@ impl LaneTests for Scalar {
     #[inline(always)]
     fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
         let (mut mask, mut t) = (0, [0.0; WIDTH]);
-        for slot in 0..WIDTH {
+        for (slot, t_slot) in t.iter_mut().enumerate() {
             let (lo, hi) = node.bounds(slot);
             if let Some((t0, _)) = slab::interval(&self.origin, &self.inv, &lo, &hi, t_min, t_max) {
                 mask |= 1 << slot;
-                t[slot] = t0;
+                *t_slot = t0;
             }
         }
         (mask, t)
@@ -76,10 +76,10 @@ impl LaneTests for Scalar {
     #[inline(always)]
     fn triangles(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
         let (mut mask, mut t) = (0, [0.0; WIDTH]);
-        for lane in 0..WIDTH {
+        for (lane, t_lane) in t.iter_mut().enumerate() {
             if let Some(tl) = self.sheared.intersect(&block.triangle(lane), t_min, t_max) {
                 mask |= 1 << lane;
-                t[lane] = tl;
+                *t_lane = tl;
             }
         }
         (mask, t)
@@ -125,7 +125,8 @@ mod sse {
         fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
             let (mut t0, mut t1) = (F32x4::splat(t_min), F32x4::splat(t_max));
             for a in 0..3 {
-                let (near, far) = if self.negative[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+                let (near, far) =
+                    if self.negative[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
                 let tn = (F32x4::load(near) - self.origin[a]) * self.inv[a];
                 let tf = (F32x4::load(far) - self.origin[a]) * self.inv[a] * self.robust_far;
                 t0 = tn.max_sel(t0);
@@ -286,18 +287,9 @@ fn walk<T: LaneTests, S: Stats, const STACK: usize>(
                 cull_t = best_t * CULL_MARGIN;
             }
         }
-        // Pop the next subtree that can still hold a nearer hit.
-        loop {
-            if sp == 0 {
-                break 'traverse;
-            }
-            sp -= 1;
-            stats.pop();
-            let (next, t_entry) = stack[sp];
-            if t_entry <= cull_t {
-                cur = next;
-                continue 'traverse;
-            }
+        match pop_nearer(&stack, &mut sp, cull_t, stats) {
+            Some(next) => cur = next,
+            None => break 'traverse,
         }
     }
     nearest_hit(&bvh.triangles, best_t, best_prim)

@@ -8,8 +8,8 @@
 
 use scenes::Triangle;
 
-use super::layout::{Bvh4Node, MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, leaf};
 use super::Bvh4;
+use super::layout::{Bvh4Node, MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, leaf};
 use crate::bvh::{Bvh, BvhNode};
 use crate::simd::{Isa, SimdChoice};
 use crate::{BuildError, BuildInput};

@@ -1,7 +1,7 @@
 //! Structural checks of the 4-wide BVH, used by the builder (debug) and the tests.
 
-use super::layout::{Bvh4Node, EMPTY, NO_PRIM, WIDTH, is_leaf, leaf_blocks};
 use super::Bvh4;
+use super::layout::{Bvh4Node, EMPTY, NO_PRIM, WIDTH, is_leaf, leaf_blocks};
 
 impl Bvh4 {
     /// Checks that every node is reachable once, children follow their parent (what bounds the
@@ -48,12 +48,19 @@ impl Bvh4 {
                             let p = block.prim[lane];
                             if lane >= used {
                                 if p != NO_PRIM || tri.iter().any(|c| !(c.x.is_nan() && c.y.is_nan() && c.z.is_nan())) {
-                                    return Err(format!("block {}: lane {lane} is neither a triangle nor empty", first + b));
+                                    return Err(format!(
+                                        "block {}: lane {lane} is neither a triangle nor empty",
+                                        first + b
+                                    ));
                                 }
                                 continue;
                             }
-                            let want = self.triangles.get(p as usize).ok_or_else(|| format!("prim {p} out of range"))?;
-                            let same = tri.iter().zip(want).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
+                            let want =
+                                self.triangles.get(p as usize).ok_or_else(|| format!("prim {p} out of range"))?;
+                            let same = tri
+                                .iter()
+                                .zip(want)
+                                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
                             if !same {
                                 return Err(format!("block {} lane {lane}: not triangle {p} of the soup", first + b));
                             }
