@@ -460,6 +460,12 @@ impl Preset {
             (Preset::OrgFast, "org") => {
                 vec![(Vec::new(), None), (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into()))]
             }
+            // The wide BVH's SIMD path beside its scalar form (issue 30: each family's SIMD/scalar
+            // speed-up), and Embree in its watertight mode, the like-for-like reference.
+            (Preset::OrgFast, "bvh4") => vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))],
+            (Preset::OrgFast, "embree") => {
+                vec![(Vec::new(), None), (vec!["embree.robust=on".into()], Some("robust".into()))]
+            }
             // Every level to 2^14, L = 14 with LOD at a pixel, and L = 11 split into ~100 blocks
             // (what the split costs a ray, beside the same level in one block).
             (Preset::EsvoScale, "esvo") => (10..=14)
@@ -532,7 +538,7 @@ impl Preset {
             Preset::OrgFig1 => vec!["ug", "org"],
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "kdtree", "octree", "bvh"],
-            Preset::OrgFast => vec!["bvh", "embree", "org"],
+            Preset::OrgFast => vec!["bvh", "bvh4", "embree", "org"],
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
             Preset::EsvoScale => vec!["bvh", "esvo"],
             Preset::SvdagTemporal => vec!["bvh", "svdag", "svdag-temporal"],
