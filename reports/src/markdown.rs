@@ -224,7 +224,8 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
         }
     }
     let _ = writeln!(out);
-    let notes = crate::gpu::notes(cases);
+    let mut notes = crate::gpu::notes(cases);
+    notes.extend(references::simd_notes(cases));
     for line in &notes {
         let _ = writeln!(out, "- {line}");
     }

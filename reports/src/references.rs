@@ -74,6 +74,40 @@ pub fn strongest_cell(cases: &[&Case], case: &Case, r: &RenderStats) -> String {
     vs_strongest(cases, case, r).map_or("—".into(), |s| format!("{:.2}× {}", s.ratio, s.label))
 }
 
+/// A case's resolved `simd` parameter (the instruction set its kernel ran, issue 30), if it has one.
+fn simd(case: &Case) -> Option<&str> {
+    case.params.get("simd").and_then(|v| v.as_str())
+}
+
+/// Each SIMD kernel's speed-up over its own scalar form (issue 30: similar factors across
+/// families rule out an implementation confound): for every case run with `simd=scalar`, the
+/// case of the same structure, resolution and machine that ran an instruction set, row by row,
+/// as the ratio of their speeds over `bvh` (paired timings where they exist).
+pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
+    let mut lines = Vec::new();
+    for scalar in cases.iter().filter(|c| simd(c) == Some("scalar")) {
+        let same = |c: &&&Case| {
+            c.structure == scalar.structure && c.resolution == scalar.resolution && c.machine == scalar.machine
+        };
+        for fast in cases.iter().filter(same) {
+            let Some(isa) = simd(fast).filter(|&isa| isa != "scalar") else { continue };
+            for r in &fast.render {
+                let Some(rs) = scalar.render.iter().find(|x| same_row(x, r)) else { continue };
+                let (Some(a), Some(b)) = (vs_bvh(cases, fast, r), vs_bvh(cases, scalar, rs)) else { continue };
+                lines.push(format!(
+                    "{} {}/{}: SIMD ({isa}) {:.2}× its scalar form `{}` (speeds over bvh timed beside each)",
+                    fast.label(),
+                    r.backend,
+                    r.workload,
+                    a / b,
+                    scalar.label()
+                ));
+            }
+        }
+    }
+    lines
+}
+
 /// "1.27×" for a ratio, "—" for none.
 pub fn times(ratio: Option<f64>) -> String {
     ratio.map_or("—".into(), |r| format!("{r:.2}×"))
@@ -119,8 +153,33 @@ mod tests {
         assert!((s.ratio - 0.3 / 3.0).abs() < 1e-12, "{}", s.ratio);
         let own = vs_strongest(&cases, &embree, &r(&embree)).expect("itself");
         assert_eq!(own.ratio, 1.0);
-        // Without a bvh row and without pairing there is nothing to compare with.
+        // Without a bvh row and without pairing there is nothing to compare with (nor a SIMD note).
+        assert!(simd_notes(&cases).is_empty());
         let lone = case("org", 20.0, None, 0.2);
         assert_eq!(vs_bvh(&[&lone], &lone, &r(&lone)), None);
+    }
+
+    /// The SIMD note pairs a kernel's instruction set with its scalar form of the same structure,
+    /// by their paired ratios to `bvh`, and nothing else.
+    #[test]
+    fn simd_speed_up_is_the_ratio_of_paired_ratios() {
+        let with = |mut c: Case, isa: &str, variant: Option<&str>| {
+            c.params = serde_json::json!({ "simd": isa });
+            c.variant = variant.map(String::from);
+            c
+        };
+        let bvh = case("bvh", 10.0, None, 1.0);
+        // 4 ms beside bvh's 8 (2×) against 10 ms beside bvh's 6 (0.6×): 3.33×.
+        let fast = with(case("bvh4", 4.0, Some(8.0), 9.0), "sse4", None);
+        let slow = with(case("bvh4", 10.0, Some(6.0), 2.0), "scalar", Some("scalar"));
+        let other = with(case("org", 5.0, Some(5.0), 3.0), "sse4", None);
+        let notes = simd_notes(&[&bvh, &fast, &slow, &other]);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with("bvh4 cpu/primary: SIMD (sse4) 3.33× its scalar form `bvh4 [scalar]`"),
+            "{}",
+            notes[0]
+        );
+        assert!(simd_notes(&[&bvh, &fast, &other]).is_empty(), "no scalar form, no note");
     }
 }

@@ -483,7 +483,8 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
         }
     }
     let _ = writeln!(out, "</table></div>");
-    let notes = crate::gpu::notes(cases);
+    let mut notes = crate::gpu::notes(cases);
+    notes.extend(references::simd_notes(cases));
     if !notes.is_empty() {
         let _ = writeln!(out, "<ul class=\"note\">");
         for line in &notes {
