@@ -20,8 +20,6 @@ pub enum Isa {
 }
 
 impl Isa {
-    pub const ALL: [Isa; 4] = [Isa::Scalar, Isa::Sse4, Isa::Avx2, Isa::Avx512];
-
     pub fn name(self) -> &'static str {
         match self {
             Isa::Scalar => "scalar",
@@ -46,11 +44,6 @@ impl Isa {
             #[cfg(not(target_arch = "x86_64"))]
             _ => false,
         }
-    }
-
-    /// Every instruction set this CPU runs, scalar first.
-    pub fn detected() -> Vec<Isa> {
-        Isa::ALL.into_iter().filter(|isa| isa.available()).collect()
     }
 }
 

@@ -186,12 +186,17 @@ mod sse {
     /// The traversal with SSE4.1 enabled throughout.
     #[target_feature(enable = "sse4.1")]
     pub(super) fn trace_sse4<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-        let tests = Sse::new(ray);
-        if stack_entries(bvh.depth) <= SHALLOW {
-            walk::<_, _, SHALLOW>(bvh, &tests, t_min, t_max, stats)
-        } else {
-            walk::<_, _, DEEPEST>(bvh, &tests, t_min, t_max, stats)
-        }
+        walk_sized(bvh, &Sse::new(ray), t_min, t_max, stats)
+    }
+}
+
+/// [`walk`] with the smallest stack the tree's depth allows.
+#[inline(always)]
+fn walk_sized<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    if stack_entries(bvh.depth) <= SHALLOW {
+        walk::<_, _, SHALLOW>(bvh, tests, t_min, t_max, stats)
+    } else {
+        walk::<_, _, DEEPEST>(bvh, tests, t_min, t_max, stats)
     }
 }
 
@@ -308,8 +313,7 @@ fn trace<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S)
         // Exercised by tests/tests/simd.rs on every built-in scene.
         #[cfg(target_arch = "x86_64")]
         Isa::Sse4 => unsafe { sse::trace_sse4(bvh, ray, t_min, t_max, stats) },
-        _ if stack_entries(bvh.depth) <= SHALLOW => walk::<_, _, SHALLOW>(bvh, &Scalar::new(ray), t_min, t_max, stats),
-        _ => walk::<_, _, DEEPEST>(bvh, &Scalar::new(ray), t_min, t_max, stats),
+        _ => walk_sized(bvh, &Scalar::new(ray), t_min, t_max, stats),
     }
 }
 

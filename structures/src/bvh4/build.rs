@@ -49,6 +49,7 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
     }
     let mut depth = 1;
     let mut children: Vec<usize> = Vec::with_capacity(WIDTH);
+    let mut inner = Vec::with_capacity(WIDTH);
     while let Some((src, dst, level)) = pending.pop() {
         depth = depth.max(level);
         let first = binary.nodes[src].first as usize;
@@ -67,7 +68,7 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
         }
         let mut node = Bvh4Node::EMPTY_NODE;
         // Inner children are laid out in slot order after the node, depth first.
-        let mut inner = Vec::with_capacity(WIDTH);
+        inner.clear();
         for (slot, &c) in children.iter().enumerate() {
             let n = &binary.nodes[c];
             let word = if n.is_leaf() {
@@ -81,7 +82,7 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
             node.set(slot, n.min, n.max, word);
         }
         nodes[dst] = node;
-        pending.extend(inner.into_iter().rev());
+        pending.extend(inner.drain(..).rev());
     }
     if depth > crate::bvh::MAX_DEPTH {
         return Err(BuildError::Limit { structure: "bvh4", detail: format!("depth {depth} passes the stack") });
