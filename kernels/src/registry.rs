@@ -85,7 +85,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "ug",
         family: "triangle",
         summary: "uniform grid, Eq. 1 (ug.lambda, default 5)",
-        params: &["ug.lambda"],
+        params: &["ug.lambda", "simd"],
         check: |p| grid_check("ug", p),
         build: |input| build_grid("ug", input),
         available: always,
@@ -94,7 +94,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "rg",
         family: "triangle",
         summary: "recursive grid, Jevans & Wyvill (rg.lambda 1, rg.gamma 16, rg.max_depth 3)",
-        params: &["rg.lambda", "rg.gamma", "rg.max_depth"],
+        params: &["rg.lambda", "rg.gamma", "rg.max_depth", "simd"],
         check: |p| grid_check("rg", p),
         build: |input| build_grid("rg", input),
         available: always,
@@ -103,7 +103,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "rg2",
         family: "triangle",
         summary: "two-level grid, Ize et al.: (8N)^0.6 top cells, 8·N_2 per cell",
-        params: &[],
+        params: &["simd"],
         check: |p| grid_check("rg2", p),
         build: |input| build_grid("rg2", input),
         available: always,
@@ -141,6 +141,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
             "org.beta",
             "org.gamma_test",
             "org.cell_test",
+            "simd",
         ],
         check: |p| grid_check("org", p),
         build: |input| build_grid("org", input),
@@ -249,8 +250,10 @@ fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
     Ok(Box::new(structures::bvh::build(input)?))
 }
 
+/// Every grid reads its kind's parameters and `simd` (the triangle tests' lanes).
 fn grid_check(name: &str, params: &Params) -> Result<(), BuildError> {
-    structures::grid::GridKind::from_params(name, params).map(drop)
+    structures::grid::GridKind::from_params(name, params)?;
+    structures::simd::SimdChoice::from_params(params)?.resolve(&structures::grid::SUPPORTED).map(drop)
 }
 
 fn build_grid(name: &str, input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {

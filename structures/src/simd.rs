@@ -47,6 +47,35 @@ impl Isa {
     }
 }
 
+/// The instruction set a structure's kernel runs, resolved against this CPU. The only ways to
+/// make one ([`SimdChoice::resolve`], [`Resolved::forced`]) check that the CPU has the set (the
+/// field is private), so a kernel holding one may enable that set's target features: this is the
+/// soundness argument of every `#[target_feature]` call in `kernels`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Resolved(Isa);
+
+impl Resolved {
+    /// The scalar tests, which run everywhere.
+    pub const SCALAR: Resolved = Resolved(Isa::Scalar);
+
+    pub fn isa(self) -> Isa {
+        self.0
+    }
+
+    pub fn name(self) -> &'static str {
+        self.0.name()
+    }
+
+    /// `isa`, if it is one of `supported` and this CPU has it (so one structure can be traced by
+    /// its SIMD and its scalar path).
+    pub fn forced(isa: Isa, supported: &[Isa]) -> Result<Self, BuildError> {
+        SimdChoice::Forced(isa).resolve(supported)
+    }
+}
+
+/// The instruction sets of a kernel whose tests run four lanes of SSE, or the scalar tests.
+pub const FOUR_LANES: [Isa; 2] = [Isa::Scalar, Isa::Sse4];
+
 /// The `simd` parameter: `auto` (the default) or an instruction set by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SimdChoice {
@@ -74,11 +103,11 @@ impl SimdChoice {
     /// The instruction set a kernel with lanes of `supported` (widest last) runs: with `auto`, the
     /// widest of them this CPU has; a forced one must be both supported and present, or the
     /// parameter is refused saying which are.
-    pub fn resolve(self, supported: &[Isa]) -> Result<Isa, BuildError> {
+    pub fn resolve(self, supported: &[Isa]) -> Result<Resolved, BuildError> {
         let usable: Vec<Isa> = supported.iter().copied().filter(|isa| isa.available()).collect();
         match self {
-            SimdChoice::Auto => Ok(usable.last().copied().unwrap_or(Isa::Scalar)),
-            SimdChoice::Forced(isa) if usable.contains(&isa) => Ok(isa),
+            SimdChoice::Auto => Ok(Resolved(usable.last().copied().unwrap_or(Isa::Scalar))),
+            SimdChoice::Forced(isa) if usable.contains(&isa) => Ok(Resolved(isa)),
             SimdChoice::Forced(isa) => Err(BuildError::BadParam {
                 key: Self::KEY.into(),
                 detail: format!(
@@ -98,15 +127,15 @@ mod tests {
 
     #[test]
     fn auto_takes_the_widest_supported_and_present() {
-        let isa = SimdChoice::Auto.resolve(&[Isa::Scalar, Isa::Sse4]).expect("resolves");
+        let isa = SimdChoice::Auto.resolve(&FOUR_LANES).expect("resolves").isa();
         assert_eq!(isa, if Isa::Sse4.available() { Isa::Sse4 } else { Isa::Scalar });
-        assert_eq!(SimdChoice::Auto.resolve(&[Isa::Scalar]).expect("resolves"), Isa::Scalar);
+        assert_eq!(SimdChoice::Auto.resolve(&[Isa::Scalar]).expect("resolves"), Resolved::SCALAR);
     }
 
     #[test]
     fn forced_sets_must_exist_and_be_supported() {
-        assert_eq!(SimdChoice::Forced(Isa::Scalar).resolve(&[Isa::Scalar, Isa::Sse4]).expect("ok"), Isa::Scalar);
-        let err = SimdChoice::Forced(Isa::Avx512).resolve(&[Isa::Scalar, Isa::Sse4]).expect_err("refused");
+        assert_eq!(Resolved::forced(Isa::Scalar, &FOUR_LANES).expect("ok"), Resolved::SCALAR);
+        let err = Resolved::forced(Isa::Avx512, &FOUR_LANES).expect_err("refused");
         assert!(err.to_string().contains("not implemented for this structure"), "{err}");
         let params = Params::parse(["simd=neon"]).expect("parses");
         let err = SimdChoice::from_params(&params).expect_err("refused");

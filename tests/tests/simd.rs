@@ -1,7 +1,8 @@
 //! The 4-wide BVH and its SIMD kernel (issue 30): exact against brute force on every built-in
 //! scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
 //! and its SIMD path bit for bit its scalar form (hits, normals and every counter) on every
-//! instruction set this machine has, forced one after another.
+//! instruction set this machine has, forced one after another; and every grid's cell lists tested
+//! and the triangle octree's leaves tested four triangles at a time bit for bit as one at a time.
 
 use kernels::cpu::brute_force;
 use kernels::{Counters, Hit, Traverse};
@@ -9,7 +10,9 @@ use rayon::prelude::*;
 use scenes::{Camera, Ray, Scene, Triangle};
 use structures::bvh4::Bvh4;
 use structures::bvh4::layout::{EMPTY, NO_PRIM, leaf_blocks};
-use structures::simd::Isa;
+use structures::grid::{Grid, GridKind};
+use structures::octree::TriOctree;
+use structures::simd::{Isa, Resolved};
 use structures::{BuildInput, Params};
 use tests::ray_set;
 
@@ -57,32 +60,61 @@ fn assert_brute_force(bvh: &Bvh4, triangles: &[Triangle], rays: &[Ray], what: &s
     rays.iter().filter(|r| bvh.intersect(r, 0.0, f32::INFINITY).is_some()).count()
 }
 
+/// A structure whose kernel runs on a choice of instruction sets.
+trait Lanes: Traverse + Sync {
+    const SUPPORTED: &'static [Isa];
+    fn set_isa(&mut self, isa: Isa);
+}
+
+impl Lanes for Bvh4 {
+    const SUPPORTED: &'static [Isa] = &structures::bvh4::build::SUPPORTED;
+    fn set_isa(&mut self, isa: Isa) {
+        self.isa = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
+    }
+}
+
+impl Lanes for Grid {
+    const SUPPORTED: &'static [Isa] = &structures::grid::SUPPORTED;
+    fn set_isa(&mut self, isa: Isa) {
+        self.isa = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
+    }
+}
+
+impl Lanes for TriOctree {
+    const SUPPORTED: &'static [Isa] = &structures::simd::FOUR_LANES;
+    fn set_isa(&mut self, isa: Isa) {
+        self.params.simd = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
+    }
+}
+
 /// Every SIMD instruction set the kernel has and this CPU runs.
-fn simd_sets() -> Vec<Isa> {
-    structures::bvh4::build::SUPPORTED.into_iter().filter(|&i| i != Isa::Scalar && i.available()).collect()
+fn simd_sets<L: Lanes>() -> Vec<Isa> {
+    L::SUPPORTED.iter().copied().filter(|&i| i != Isa::Scalar && i.available()).collect()
 }
 
 /// The SIMD paths against the scalar one on `rays`: hit, normal and counters per ray, bit for bit.
-fn assert_simd_is_scalar(bvh: &mut Bvh4, rays: &[Ray], what: &str) {
-    let trace = |bvh: &Bvh4| -> Vec<Traced> {
+fn assert_simd_is_scalar<L: Lanes>(accel: &mut L, rays: &[Ray], what: &str) {
+    let trace = |accel: &L| -> Vec<Traced> {
         rays.par_iter()
             .map(|ray| {
                 let mut c = Counters::default();
-                let hit = bvh.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
+                let hit = accel.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
                 assert_eq!(
                     key(hit),
-                    key(bvh.intersect(ray, 0.0, f32::INFINITY)),
+                    key(accel.intersect(ray, 0.0, f32::INFINITY)),
                     "{what}: counted and timed paths agree"
                 );
                 (hit.map(|h| (h.t.to_bits(), h.prim, h.normal.to_array().map(f32::to_bits))), c)
             })
             .collect()
     };
-    bvh.set_isa(Isa::Scalar).expect("scalar runs everywhere");
-    let scalar = trace(bvh);
-    for isa in simd_sets() {
-        bvh.set_isa(isa).expect("detected");
-        let simd = trace(bvh);
+    accel.set_isa(Isa::Scalar);
+    let scalar = trace(accel);
+    let sets = simd_sets::<L>();
+    assert!(!sets.is_empty() || !Isa::Sse4.available(), "{what}: this CPU has SSE4.1 but no SIMD path was tried");
+    for isa in sets {
+        accel.set_isa(isa);
+        let simd = trace(accel);
         let differ = scalar.iter().zip(&simd).filter(|(a, b)| a != b).count();
         let first = scalar.iter().zip(&simd).position(|(a, b)| a != b);
         assert_eq!(
@@ -95,21 +127,57 @@ fn assert_simd_is_scalar(bvh: &mut Bvh4, rays: &[Ray], what: &str) {
     }
 }
 
+/// The shared ray set of a scene and its camera's rays at 160².
+fn scene_rays(scene: &Scene, triangles: &[Triangle], name: &str) -> (Vec<Ray>, Vec<Ray>) {
+    let rays: Vec<Ray> =
+        ray_set(scene, triangles, RAYS_PER_SCENE, 0x51AD ^ name.len() as u64).iter().map(|r| r.ray).collect();
+    let camera = Camera::new(scene.camera_spec(), 160, 160);
+    let primary: Vec<Ray> = (0..160 * 160).map(|i| camera.ray(i % 160, i / 160)).collect();
+    (rays, primary)
+}
+
 fn check_scene(name: &str) {
     let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
     let triangles = scene.triangles();
     let mut bvh = build(&scene, triangles.clone());
-    let rays: Vec<Ray> =
-        ray_set(&scene, &triangles, RAYS_PER_SCENE, 0x51AD ^ name.len() as u64).iter().map(|r| r.ray).collect();
+    let (rays, primary) = scene_rays(&scene, &triangles, name);
     let hits = assert_brute_force(&bvh, &triangles, &rays, name);
     assert!(hits > rays.len() / 10, "{name}: only {hits} of {} rays hit", rays.len());
-    let camera = Camera::new(scene.camera_spec(), 160, 160);
-    let primary: Vec<Ray> = (0..160 * 160).map(|i| camera.ray(i % 160, i / 160)).collect();
     assert_simd_is_scalar(&mut bvh, &rays, name);
     assert_simd_is_scalar(&mut bvh, &primary, &format!("{name} primary"));
 }
 
 tests::per_builtin_scene!(check_scene);
+
+/// Every grid kind's cell lists and the triangle octree's leaves, tested four triangles at a time,
+/// give their scalar loops' hits and counters bit for bit (their exactness against brute force is
+/// `tests/grids.rs`' and `tests/octree.rs`').
+mod grids {
+    use super::*;
+
+    fn check_grids(name: &str) {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
+        let triangles = scene.triangles();
+        let (rays, primary) = scene_rays(&scene, &triangles, name);
+        for kind in ["ug", "rg", "rg2", "org"] {
+            let params = Params::default();
+            let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
+            let mut grid = structures::grid::build(&input, GridKind::from_params(kind, &params).expect("defaults"))
+                .unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
+            assert_simd_is_scalar(&mut grid, &rays, &format!("{name} {kind}"));
+            assert_simd_is_scalar(&mut grid, &primary, &format!("{name} {kind} primary"));
+        }
+        for mailbox in ["on", "off"] {
+            let params = Params::parse([format!("octree.mailbox={mailbox}").as_str()]).expect("parses");
+            let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
+            let mut octree = TriOctree::build(&input).unwrap_or_else(|e| panic!("{name} octree: {e}"));
+            assert_simd_is_scalar(&mut octree, &rays, &format!("{name} octree mailbox={mailbox}"));
+            assert_simd_is_scalar(&mut octree, &primary, &format!("{name} octree mailbox={mailbox} primary"));
+        }
+    }
+
+    tests::per_builtin_scene!(check_grids);
+}
 
 /// A stack of 300 coplanar triangles overlapping around one point, in shuffled sizes and turns:
 /// rays through the overlap hit many of them at equal `t` (the plane z = 1 is exact in f32 and

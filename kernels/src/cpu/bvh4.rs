@@ -1,10 +1,11 @@
 //! CPU kernel of the 4-wide BVH (`structures::bvh4`, issue 30): ordered depth-first traversal
 //! testing a node's four child boxes, and a leaf block's four triangles, at once.
 //!
-//! One traversal ([`walk`]) over two implementations of the same two tests ([`LaneTests`]):
-//! - [`Sse`]: 4-lane SSE, the arithmetic of the scalar tests lane by lane in the same order
+//! One traversal ([`walk`]) over two implementations of the same two tests (the box test
+//! [`BoxLanes`] and the shared four-lane triangle test [`TriangleLanes`]):
+//! - SSE: 4-lane SSE, the arithmetic of the scalar tests lane by lane in the same order
 //!   ([`super::lanes`]), so its answers are theirs bit for bit;
-//! - [`Scalar`]: the shared scalar slab test ([`super::slab`]) and watertight triangle test
+//! - scalar: the shared scalar slab test ([`super::slab`]) and watertight triangle test
 //!   ([`super::triangle`]) one lane at a time — `simd=scalar`, the oracle the SIMD path is
 //!   checked against, and the denominator of the SIMD speed-up in the report.
 //!
@@ -13,12 +14,13 @@
 
 use scenes::{Camera, Ray};
 use structures::bvh4::Bvh4;
-use structures::bvh4::layout::{Bvh4Node, NO_PRIM, Tri4, WIDTH, is_leaf, leaf_blocks};
+use structures::bvh4::layout::{Bvh4Node, NO_PRIM, WIDTH, is_leaf, leaf_blocks};
 use structures::simd::Isa;
 
 use super::bvh::{CULL_MARGIN, pop_nearer};
 use super::slab;
-use super::triangle::{ShearedRay, nearest_hit};
+use super::triangle::nearest_hit;
+use super::triangle4::{self, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -37,29 +39,27 @@ const DEEPEST: usize = stack_entries(structures::bvh::MAX_DEPTH);
 /// time on the dragon.
 const SHALLOW: usize = stack_entries(21);
 
-/// The two tests of a traversal step, over the four lanes of a node or a block.
-trait LaneTests {
+/// The box test of a traversal step, over the four slots of a node (the leaf blocks' triangles
+/// are tested by [`TriangleLanes`]).
+trait BoxLanes {
     /// Children of `node` whose boxes the ray enters within `(t_min, t_max)`: one bit per slot,
     /// and each slot's entry distance.
     fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
-    /// Triangles of `block` hit within `(t_min, t_max)`: one bit per lane, and each lane's `t`.
-    fn triangles(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
 }
 
-/// The shared scalar tests, lane after lane.
-struct Scalar {
+/// The shared scalar slab test, slot after slot.
+struct ScalarBoxes {
     origin: [f32; 3],
     inv: [f32; 3],
-    sheared: ShearedRay,
 }
 
-impl Scalar {
+impl ScalarBoxes {
     fn new(ray: &Ray) -> Self {
-        Self { origin: ray.origin.to_array(), inv: slab::reciprocal(ray.dir), sheared: ShearedRay::new(ray) }
+        Self { origin: ray.origin.to_array(), inv: slab::reciprocal(ray.dir) }
     }
 }
 
-impl LaneTests for Scalar {
+impl BoxLanes for ScalarBoxes {
     #[inline(always)]
     fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
         let (mut mask, mut t) = (0, [0.0; WIDTH]);
@@ -72,54 +72,37 @@ impl LaneTests for Scalar {
         }
         (mask, t)
     }
-
-    #[inline(always)]
-    fn triangles(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
-        let (mut mask, mut t) = (0, [0.0; WIDTH]);
-        for (lane, t_lane) in t.iter_mut().enumerate() {
-            if let Some(tl) = self.sheared.intersect(&block.triangle(lane), t_min, t_max) {
-                mask |= 1 << lane;
-                *t_lane = tl;
-            }
-        }
-        (mask, t)
-    }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod sse {
     use super::*;
     use crate::cpu::lanes::F32x4;
+    use crate::cpu::triangle4::Sse;
 
-    /// The same tests over 4 SSE lanes.
-    pub(super) struct Sse {
+    /// The slab test over 4 SSE lanes.
+    struct SseBoxes {
         origin: [F32x4; 3],
         inv: [F32x4; 3],
         /// Per axis: the direction is negative, so a box is entered through its upper bound.
         negative: [bool; 3],
         robust_far: F32x4,
-        sheared: ShearedRay,
-        shear: [F32x4; 3],
     }
 
-    impl Sse {
+    impl SseBoxes {
         #[inline(always)]
-        pub(super) fn new(ray: &Ray) -> Self {
+        fn new(ray: &Ray) -> Self {
             let inv = slab::reciprocal(ray.dir);
-            let o = ray.origin.to_array();
-            let sheared = ShearedRay::new(ray);
             Self {
-                origin: o.map(F32x4::splat),
+                origin: ray.origin.to_array().map(F32x4::splat),
                 inv: inv.map(F32x4::splat),
                 negative: inv.map(|i| i < 0.0),
                 robust_far: F32x4::splat(slab::ROBUST_FAR),
-                shear: [sheared.sx, sheared.sy, sheared.sz].map(F32x4::splat),
-                sheared,
             }
         }
     }
 
-    impl LaneTests for Sse {
+    impl BoxLanes for SseBoxes {
         /// [`slab::interval`] on four boxes: `max_sel`/`min_sel` are its `if tn > t0` / `if tf < t1`.
         #[inline(always)]
         fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
@@ -134,69 +117,29 @@ mod sse {
             }
             (t0.le(t1).bits(), t0.to_array())
         }
-
-        /// [`ShearedRay::intersect`] on four triangles, operation for operation; a lane with an
-        /// edge function exactly zero is recomputed by the scalar test, whose f64 fallback decides it.
-        #[inline(always)]
-        fn triangles(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
-            let r = &self.sheared;
-            let (kx, ky, kz) = (r.kx, r.ky, r.kz);
-            let [sx, sy, sz] = self.shear;
-            let corner = |k: usize| {
-                let v = &block.v[k];
-                let (x, y, z) = (
-                    F32x4::load(&v[kx]) - self.origin[kx],
-                    F32x4::load(&v[ky]) - self.origin[ky],
-                    F32x4::load(&v[kz]) - self.origin[kz],
-                );
-                (x - sx * z, y - sy * z, z)
-            };
-            let (ax, ay, az) = corner(0);
-            let (bx, by, bz) = corner(1);
-            let (cx, cy, cz) = corner(2);
-            let u = cx * by - cy * bx;
-            let v = ax * cy - ay * cx;
-            let w = bx * ay - by * ax;
-            let zero = F32x4::splat(0.0);
-            let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
-            let outside = (u.lt(zero) | v.lt(zero) | w.lt(zero)) & (u.gt(zero) | v.gt(zero) | w.gt(zero));
-            // Most blocks a ray opens it misses in every lane: stop before the division. A lane
-            // whose `u` is NaN (an empty lane) gets no `t` in the scalar test either.
-            if (!outside & u.eq(u)).bits() | on_edge == 0 {
-                return (0, [0.0; WIDTH]);
-            }
-            let det = u + v + w;
-            let t = (u * (sz * az) + v * (sz * bz) + w * (sz * cz)) / det;
-            let hit = !outside & det.ne(zero) & t.gt(F32x4::splat(t_min)) & t.lt(F32x4::splat(t_max));
-            let (mut mask, mut t) = (hit.bits(), t.to_array());
-            let mut edge = on_edge;
-            while edge != 0 {
-                let lane = edge.trailing_zeros() as usize;
-                edge &= edge - 1;
-                mask &= !(1 << lane);
-                if let Some(tl) = r.intersect(&block.triangle(lane), t_min, t_max) {
-                    mask |= 1 << lane;
-                    t[lane] = tl;
-                }
-            }
-            (mask, t)
-        }
     }
 
     /// The traversal with SSE4.1 enabled throughout.
     #[target_feature(enable = "sse4.1")]
     pub(super) fn trace_sse4<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-        walk_sized(bvh, &Sse::new(ray), t_min, t_max, stats)
+        walk_sized(bvh, &SseBoxes::new(ray), &Sse::new(ray), t_min, t_max, stats)
     }
 }
 
 /// [`walk`] with the smallest stack the tree's depth allows.
 #[inline(always)]
-fn walk_sized<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+fn walk_sized<B: BoxLanes, T: TriangleLanes, S: Stats>(
+    bvh: &Bvh4,
+    boxes: &B,
+    tris: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
     if stack_entries(bvh.depth) <= SHALLOW {
-        walk::<_, _, SHALLOW>(bvh, tests, t_min, t_max, stats)
+        walk::<_, _, _, SHALLOW>(bvh, boxes, tris, t_min, t_max, stats)
     } else {
-        walk::<_, _, DEEPEST>(bvh, tests, t_min, t_max, stats)
+        walk::<_, _, _, DEEPEST>(bvh, boxes, tris, t_min, t_max, stats)
     }
 }
 
@@ -205,9 +148,10 @@ fn walk_sized<T: LaneTests, S: Stats>(bvh: &Bvh4, tests: &T, t_min: f32, t_max: 
 /// starts beyond the best hit (with the reference's [`CULL_MARGIN`]). The loop needs no counter:
 /// every inner child lies after its parent (`Bvh4::validate`), so no node is visited twice.
 #[inline(always)]
-fn walk<T: LaneTests, S: Stats, const STACK: usize>(
+fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
     bvh: &Bvh4,
-    tests: &T,
+    boxes: &B,
+    tris: &T,
     t_min: f32,
     t_max: f32,
     stats: &mut S,
@@ -223,7 +167,7 @@ fn walk<T: LaneTests, S: Stats, const STACK: usize>(
         stats.visit();
         if !is_leaf(cur) {
             let node = &bvh.nodes[cur as usize];
-            let (mask, t) = tests.boxes(node, t_min, cull_t);
+            let (mask, t) = boxes.boxes(node, t_min, cull_t);
             if mask != 0 {
                 let first = mask.trailing_zeros() as usize;
                 if mask & (mask - 1) == 0 {
@@ -277,7 +221,7 @@ fn walk<T: LaneTests, S: Stats, const STACK: usize>(
                 // Up to the best hit inclusive once there is one: an equal `t` with a smaller
                 // triangle index still wins.
                 let limit = if best_prim == NO_PRIM { best_t } else { best_t.next_up() };
-                let (mut mask, t) = tests.triangles(block, t_min, limit);
+                let (mut mask, t) = tris.block(block, t_min, limit);
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -306,14 +250,13 @@ fn trace<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S)
     if !crate::ray_is_traceable(ray, t_min, t_max) {
         return None;
     }
-    match bvh.isa() {
-        // SAFETY: `trace_sse4` needs SSE4.1. `Bvh4::isa` is `Sse4` only when
-        // `structures::simd::SimdChoice::resolve` found it with `is_x86_feature_detected!("sse4.1")`
-        // (the field is private; its setter resolves the same way), so this CPU has it.
+    match bvh.isa.isa() {
+        // SAFETY: `trace_sse4` needs SSE4.1. `Bvh4::isa` is a `structures::simd::Resolved`,
+        // which holds `Sse4` only where `is_x86_feature_detected!("sse4.1")` found it, so this CPU has it.
         // Exercised by tests/tests/simd.rs on every built-in scene.
         #[cfg(target_arch = "x86_64")]
         Isa::Sse4 => unsafe { sse::trace_sse4(bvh, ray, t_min, t_max, stats) },
-        _ => walk_sized(bvh, &Scalar::new(ray), t_min, t_max, stats),
+        _ => walk_sized(bvh, &ScalarBoxes::new(ray), &triangle4::Scalar::new(ray), t_min, t_max, stats),
     }
 }
 

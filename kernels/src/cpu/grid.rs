@@ -35,12 +35,19 @@
 //! (into an occupied brick or a sub-grid, at most `2·MAX_DEPTH − 1` times in a row) or moves one
 //! brick or cell forward on one axis, so a DDA ends after at most `res.x + res.y + res.z` units. No mailbox: a triangle listed in
 //! several cells is tested again in each.
+//!
+//! **Triangle tests.** A cell's list is tested four triangles at a time in SSE lanes where the
+//! CPU has them (`simd=auto|sse4`; `cpu::triangle4`, bit for bit the scalar test per lane, the
+//! first of equally near triangles winning as in the scalar loop), or one at a time
+//! (`simd=scalar`, the oracle): the same hits either way.
 
 use scenes::{Camera, Ray};
 use structures::grid::{BRICK_SHIFT, Grid, GridHeader, SUBGRID_BIT};
+use structures::simd::Isa;
 
 use super::slab;
-use super::triangle::{ShearedRay, nearest_hit};
+use super::triangle::nearest_hit;
+use super::triangle4::{self, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -251,11 +258,19 @@ fn occupied(grid: &Grid, h: &GridHeader, index: u32) -> bool {
     grid.bricks[(h.first_brick + index / 32) as usize] & (1 << (index % 32)) != 0
 }
 
-fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+/// The hierarchical DDA, testing each visited cell's triangles with `tris`.
+#[inline(always)]
+fn walk<T: TriangleLanes, S: Stats>(
+    grid: &Grid,
+    ray: &Ray,
+    tris: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
     let top = grid.headers.first()?;
     let dda = DdaRay::new(ray);
     let t_enter = dda.clip(top, t_min, t_max)?;
-    let sheared = ShearedRay::new(ray);
     let mut best_t = t_max;
     let mut cull_t = cull_bound(t_max);
     let mut best_prim = u32::MAX;
@@ -300,13 +315,13 @@ fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S
                 cur = dda.enter(grid, sub, cur.t_in);
                 continue 'traverse;
             }
-            for &r in refs {
-                stats.prim_test();
-                if let Some(t) = sheared.intersect(&grid.triangles[r as usize], t_min, best_t) {
-                    best_t = t;
-                    cull_t = cull_bound(t);
-                    best_prim = r;
+            if S::COUNTING {
+                for _ in refs {
+                    stats.prim_test();
                 }
+            }
+            if tris.nearest(&grid.triangles, refs, t_min, &mut best_t, &mut best_prim) {
+                cull_t = cull_bound(best_t);
             }
         }
         loop {
@@ -331,6 +346,26 @@ fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S
         }
     }
     nearest_hit(&grid.triangles, best_t, best_prim)
+}
+
+/// The walk with SSE4.1 enabled throughout, each cell's triangles tested four at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+fn trace_sse4<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    walk(grid, ray, &triangle4::Sse::new(ray), t_min, t_max, stats)
+}
+
+/// Runs the walk on the instruction set the grid was resolved to.
+#[allow(unsafe_code)]
+fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    match grid.isa.isa() {
+        // SAFETY: `trace_sse4` needs SSE4.1. `Grid::isa` is a `structures::simd::Resolved`,
+        // which holds `Sse4` only where `is_x86_feature_detected!("sse4.1")` found it, so this CPU has it.
+        // Exercised by tests/tests/simd.rs on every built-in scene.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse4 => unsafe { trace_sse4(grid, ray, t_min, t_max, stats) },
+        _ => walk(grid, ray, &triangle4::Scalar::new(ray), t_min, t_max, stats),
+    }
 }
 
 impl Traverse for Grid {

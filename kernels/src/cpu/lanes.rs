@@ -57,6 +57,23 @@ mod sse {
             bytemuck::cast(self.0)
         }
 
+        /// The 4 × 4 transpose: lane `j` of result `i` is lane `i` of `rows[j]` (unpack and move
+        /// shuffles only, no arithmetic), how four triangles read from the soup become lanes.
+        #[inline(always)]
+        pub fn transpose(rows: [Self; 4]) -> [Self; 4] {
+            let [r0, r1, r2, r3] = rows.map(|r| r.0);
+            unsafe {
+                let (a, b) = (_mm_unpacklo_ps(r0, r1), _mm_unpacklo_ps(r2, r3));
+                let (c, d) = (_mm_unpackhi_ps(r0, r1), _mm_unpackhi_ps(r2, r3));
+                [
+                    Self(_mm_movelh_ps(a, b)),
+                    Self(_mm_movehl_ps(b, a)),
+                    Self(_mm_movelh_ps(c, d)),
+                    Self(_mm_movehl_ps(d, c)),
+                ]
+            }
+        }
+
         /// `if self > other { self } else { other }` per lane (`maxps`).
         #[inline(always)]
         pub fn max_sel(self, other: Self) -> Self {
@@ -157,6 +174,15 @@ mod sse {
             assert_eq!(v.lt(F32x4::splat(2.5)).bits(), 0b0011, "lane 0 is the lowest bit");
             assert_eq!((v.gt(F32x4::splat(1.5)) & v.lt(F32x4::splat(3.5))).bits(), 0b0110);
             assert_eq!((v.lt(F32x4::splat(1.5)) | v.gt(F32x4::splat(3.5))).bits(), 0b1001);
+        }
+
+        #[test]
+        fn transpose_swaps_rows_and_lanes() {
+            let rows: [F32x4; 4] = std::array::from_fn(|j| F32x4::load(&std::array::from_fn(|i| (10 * j + i) as f32)));
+            let cols = F32x4::transpose(rows);
+            for (i, col) in cols.iter().enumerate() {
+                assert_eq!(col.to_array(), std::array::from_fn(|j| (10 * j + i) as f32), "column {i}");
+            }
         }
     }
 }

@@ -22,6 +22,7 @@ pub mod svo;
 pub mod svo_naive;
 pub mod tree64;
 pub mod triangle;
+pub(crate) mod triangle4;
 pub mod vdb;
 pub mod voxel_dda;
 pub mod wide_dda;

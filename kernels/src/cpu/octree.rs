@@ -18,13 +18,20 @@
 //! Mailboxing (`octree.mailbox=on`): a small direct-mapped cache of triangle ids per ray; a
 //! triangle listed in several leaves the ray visits is tested once. Skipping it is exact: its
 //! earlier test was against a farther (or equal) nearest hit.
+//!
+//! A leaf's triangles (those past the mailbox) are tested four at a time in SSE lanes where the
+//! CPU has them (`simd=auto|sse4`, `cpu::triangle4`), or one at a time (`simd=scalar`): the same
+//! hits and counters.
 
 use scenes::{Camera, Ray};
+use structures::bvh4::layout::WIDTH;
 use structures::octree::{MAX_DEPTH, TriOctree, layout};
+use structures::simd::Isa;
 
 use super::kdtree::MARGIN;
 use super::slab;
-use super::triangle::{ShearedRay, nearest_hit};
+use super::triangle::nearest_hit;
+use super::triangle4::{self, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
 
@@ -115,17 +122,47 @@ impl Frame {
     }
 }
 
+/// The walk with SSE4.1 enabled throughout, a leaf's triangles tested four at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+fn trace_sse4<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    walk(tree, ray, &triangle4::Sse::new(ray), t_min, t_max, stats)
+}
+
+/// Runs the walk on the instruction set the octree was resolved to.
+#[allow(unsafe_code)]
 fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if !ray_is_traceable(ray, t_min, t_max) {
         return None;
     }
+    match tree.params.simd.isa() {
+        // SAFETY: `trace_sse4` needs SSE4.1. `OctreeParams::simd` is a `structures::simd::Resolved`,
+        // which holds `Sse4` only where `is_x86_feature_detected!("sse4.1")` found it, so this CPU has it.
+        // Exercised by tests/tests/simd.rs on every built-in scene.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse4 => unsafe { trace_sse4(tree, ray, t_min, t_max, stats) },
+        _ => walk(tree, ray, &triangle4::Scalar::new(ray), t_min, t_max, stats),
+    }
+}
+
+/// The parametric walk, testing the triangles of each leaf it reaches with `tris`: those not in
+/// the mailbox, in list order, four at a time (the first of equal `t` wins, as one at a time).
+#[inline(always)]
+fn walk<T: TriangleLanes, S: Stats>(
+    tree: &TriOctree,
+    ray: &Ray,
+    tris: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
     let r = RayT { origin: ray.origin.to_array(), inv: slab::reciprocal(ray.dir), t_min, t_max };
-    let sheared = ShearedRay::new(ray);
     let (mut best_t, mut best_prim) = (t_max, u32::MAX);
     let mut mailbox = [u32::MAX; MAILBOX];
     let mailboxing = tree.params.mailbox;
     let mut test_leaf = |record: usize, best_t: &mut f32, best_prim: &mut u32, stats: &mut S| {
         let [count, first] = tree.records[record];
+        let (mut quad, mut n) = ([0u32; WIDTH], 0);
         for &prim in &tree.refs[first as usize..(first + count) as usize] {
             if mailboxing {
                 let slot = &mut mailbox[prim as usize % MAILBOX];
@@ -135,10 +172,15 @@ fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &
                 *slot = prim;
             }
             stats.prim_test();
-            if let Some(t) = sheared.intersect(&tree.triangles[prim as usize], t_min, *best_t) {
-                *best_t = t;
-                *best_prim = prim;
+            quad[n] = prim;
+            n += 1;
+            if n == WIDTH {
+                tris.nearest(&tree.triangles, &quad, t_min, best_t, best_prim);
+                n = 0;
             }
+        }
+        if n > 0 {
+            tris.nearest(&tree.triangles, &quad[..n], t_min, best_t, best_prim);
         }
     };
     stats.step();

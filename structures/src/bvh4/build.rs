@@ -15,7 +15,7 @@ use crate::simd::{Isa, SimdChoice};
 use crate::{BuildError, BuildInput};
 
 /// The instruction sets the 4-wide kernel is written for.
-pub const SUPPORTED: [Isa; 2] = [Isa::Scalar, Isa::Sse4];
+pub const SUPPORTED: [Isa; 2] = crate::simd::FOUR_LANES;
 
 pub fn build(input: &BuildInput) -> Result<Bvh4, BuildError> {
     let isa = SimdChoice::from_params(input.params)?.resolve(&SUPPORTED)?;

@@ -19,7 +19,7 @@ use std::sync::Arc;
 use scenes::Triangle;
 
 use crate::bvh::BvhPreset;
-use crate::simd::Isa;
+use crate::simd::Resolved;
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
 pub use layout::{Bvh4Node, Tri4};
 
@@ -32,26 +32,13 @@ pub struct Bvh4 {
     pub preset: BvhPreset,
     /// Longest root-to-leaf path, in wide nodes.
     pub depth: usize,
-    /// Private: the kernel's SIMD path is only sound on a CPU that has the instruction set, which
-    /// [`Bvh4::isa`]'s setters check.
-    isa: Isa,
+    /// The instruction set the kernel runs (`simd`, resolved against this CPU).
+    pub isa: Resolved,
 }
 
 impl Bvh4 {
     pub fn build(input: &BuildInput) -> Result<Self, BuildError> {
         build::build(input)
-    }
-
-    /// The instruction set the kernel runs (resolved from `simd` against this CPU).
-    pub fn isa(&self) -> Isa {
-        self.isa
-    }
-
-    /// Switches the kernel to `isa` (one of [`build::SUPPORTED`] this CPU has), so one tree can be
-    /// traced by the SIMD and the scalar path.
-    pub fn set_isa(&mut self, isa: Isa) -> Result<(), BuildError> {
-        self.isa = crate::simd::SimdChoice::Forced(isa).resolve(&build::SUPPORTED)?;
-        Ok(())
     }
 
     /// Triangles held in blocks (lanes in use).

@@ -11,6 +11,7 @@ use super::layout::{GridHeader, SUBGRID_BIT};
 use super::level::{Footprint, LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
 use super::{BetaRule, CellTest, GammaTest, Grid, GridKind, LevelStats};
+use crate::simd::SimdChoice;
 use crate::{BuildError, BuildInput};
 
 /// The deepest hierarchy any kind builds (seed 002 §2: MAXDEPTH = 4 × 2 = 8); the kernels'
@@ -156,6 +157,7 @@ fn top_resolution(kind: GridKind, all: &[u32], bboxes: &[Aabb], bounds: &Aabb) -
 }
 
 pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
+    let isa = SimdChoice::from_params(input.params)?.resolve(&super::SUPPORTED)?;
     let tris = &input.triangles;
     if tris.len() >= SUBGRID_BIT as usize {
         return Err(BuildError::Limit {
@@ -219,6 +221,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     }
     let (headers, cells, refs) = flatten(&nodes);
     let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
+    grid.isa = isa;
     grid.levels = levels;
     grid.budget_stop = budget_stop;
     Ok(grid)

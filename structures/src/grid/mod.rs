@@ -26,6 +26,7 @@ use std::sync::Arc;
 use scenes::Triangle;
 use serde::Serialize;
 
+use crate::simd::{Isa, Resolved};
 use crate::{MemoryReport, Structure};
 pub use build::{MAX_DEPTH, MAX_REFS, build};
 pub use layout::{BRICK_SHIFT, GridHeader, SUBGRID_BIT};
@@ -167,7 +168,14 @@ pub struct Grid {
     pub levels: Vec<LevelStats>,
     /// The level that was not built because it would have passed [`build::MAX_REFS`].
     pub budget_stop: Option<u32>,
+    /// The instruction set the kernel tests triangles with (`simd`, resolved against this CPU;
+    /// scalar until the build resolves it).
+    pub isa: Resolved,
 }
+
+/// The instruction sets the grid kernel's triangle tests are written for (four lanes over each
+/// cell's list, `kernels::cpu::triangle4`).
+pub const SUPPORTED: [Isa; 2] = crate::simd::FOUR_LANES;
 
 impl Grid {
     /// A grid from its headers (`first_cell` set), prefix-summed cells and references: sets each
@@ -184,7 +192,17 @@ impl Grid {
             h.first_brick = bricks.len() as u32;
             bricks.extend(layout::occupancy(h, &cells[h.first_cell as usize..]));
         }
-        Grid { kind, headers, cells, refs, bricks, triangles, levels: Vec::new(), budget_stop: None }
+        Grid {
+            kind,
+            headers,
+            cells,
+            refs,
+            bricks,
+            triangles,
+            levels: Vec::new(),
+            budget_stop: None,
+            isa: Resolved::SCALAR,
+        }
     }
 
     /// N_c: cells over all levels.
@@ -222,6 +240,7 @@ impl Structure for Grid {
             },
             "levels": self.levels,
             "budget_stop": self.budget_stop,
+            "simd": self.isa.name(),
         })
     }
 }

@@ -26,6 +26,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use scenes::Triangle;
 
+use crate::simd::{Resolved, SimdChoice};
 use crate::{BuildError, BuildInput, MemoryReport, Params, Structure};
 pub use layout::Record;
 
@@ -49,10 +50,13 @@ pub struct OctreeParams {
     pub max_depth: u32,
     pub cell_test: CellTest,
     pub mailbox: bool,
+    /// The instruction set a leaf's triangles are tested with, four at a time (`simd`).
+    pub simd: Resolved,
 }
 
 impl OctreeParams {
-    pub const KEYS: [&'static str; 4] = ["octree.leaf_size", "octree.max_depth", "octree.cell_test", "octree.mailbox"];
+    pub const KEYS: [&'static str; 5] =
+        ["octree.leaf_size", "octree.max_depth", "octree.cell_test", "octree.mailbox", SimdChoice::KEY];
 
     pub fn from_params(params: &Params) -> Result<Self, BuildError> {
         let p = Self {
@@ -64,6 +68,7 @@ impl OctreeParams {
                 &[("sat", CellTest::Sat), ("bbox", CellTest::Bbox)],
             )?,
             mailbox: params.choice("octree.mailbox", true, &[("on", true), ("off", false)])?,
+            simd: SimdChoice::from_params(params)?.resolve(&crate::simd::FOUR_LANES)?,
         };
         let bad =
             |key: &str, detail: &str| Err(BuildError::BadParam { key: format!("octree.{key}"), detail: detail.into() });
@@ -171,6 +176,7 @@ impl Structure for TriOctree {
             "max_depth": p.depth_for(self.triangles.len()),
             "cell_test": match p.cell_test { CellTest::Sat => "sat", CellTest::Bbox => "bbox" },
             "mailbox": if p.mailbox { "on" } else { "off" },
+            "simd": p.simd.name(),
             "depth": self.depth,
             "leaves": self.leaves,
             "budget_stop": self.budget_stop,

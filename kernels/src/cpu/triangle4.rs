@@ -1,0 +1,254 @@
+//! The watertight triangle test ([`super::triangle`]) over four triangles at once (issue 30),
+//! shared by every triangle kernel with SIMD lanes: the wide BVH's copied blocks ([`Tri4`]) and
+//! the reference lists of the grids and the kd-tree, read four triangles at a time from the soup.
+//!
+//! Two implementations of [`TriangleLanes`]:
+//! - [`Scalar`]: the shared scalar test one triangle after another — `simd=scalar`, the oracle;
+//! - `Sse` (x86-64): the same operations in the same order in four SSE lanes ([`super::lanes`]),
+//!   so every lane's answer is the scalar test's bit for bit; a lane with an edge function
+//!   exactly zero is recomputed by the scalar test, whose f64 fallback decides it.
+//!
+//! A reference list is tested in its order, four at a time against the best hit so far, and the
+//! hits of a quadruple taken in lane order with a strict `<`: the first of equally near triangles
+//! wins, as in the scalar loop, so lists give the scalar kernels' hits exactly.
+
+use scenes::{Ray, Triangle};
+use structures::bvh4::layout::{Tri4, WIDTH};
+
+use super::triangle::ShearedRay;
+
+/// The tests of a kernel's triangles, four lanes at a time.
+pub(crate) trait TriangleLanes {
+    /// Triangles of `block` hit within `(t_min, t_max)`: one bit per lane, and each lane's `t`.
+    fn block(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
+
+    /// Triangles `ids` (one to four) of `tris` hit within `(t_min, t_max)`, bits and `t`s as
+    /// [`TriangleLanes::block`]'s.
+    fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
+
+    /// The nearest of triangles `ids` of `tris` hit within `(t_min, best_t)`, in list order (the
+    /// first of equal `t` wins): updates `best_t` and `best_prim`, and says whether it did.
+    #[inline(always)]
+    fn nearest(&self, tris: &[Triangle], ids: &[u32], t_min: f32, best_t: &mut f32, best_prim: &mut u32) -> bool {
+        let mut found = false;
+        for quad in ids.chunks(WIDTH) {
+            let (mut mask, t) = self.listed(tris, quad, t_min, *best_t);
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if t[lane] < *best_t {
+                    *best_t = t[lane];
+                    *best_prim = quad[lane];
+                    found = true;
+                }
+            }
+        }
+        found
+    }
+}
+
+/// The shared scalar test, one lane at a time.
+pub(crate) struct Scalar(pub ShearedRay);
+
+impl Scalar {
+    pub fn new(ray: &Ray) -> Self {
+        Self(ShearedRay::new(ray))
+    }
+}
+
+impl TriangleLanes for Scalar {
+    #[inline(always)]
+    fn block(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+        lane_by_lane(WIDTH, |lane| self.0.intersect(&block.triangle(lane), t_min, t_max))
+    }
+
+    #[inline(always)]
+    fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+        lane_by_lane(ids.len(), |lane| self.0.intersect(&tris[ids[lane] as usize], t_min, t_max))
+    }
+
+    /// The scalar loop itself: each triangle tested against the best hit so far.
+    #[inline(always)]
+    fn nearest(&self, tris: &[Triangle], ids: &[u32], t_min: f32, best_t: &mut f32, best_prim: &mut u32) -> bool {
+        let mut found = false;
+        for &id in ids {
+            if let Some(t) = self.0.intersect(&tris[id as usize], t_min, *best_t) {
+                *best_t = t;
+                *best_prim = id;
+                found = true;
+            }
+        }
+        found
+    }
+}
+
+/// Lanes `0..n` by `test(lane)`, collected as bits and `t`s.
+#[inline(always)]
+fn lane_by_lane(n: usize, test: impl Fn(usize) -> Option<f32>) -> (u32, [f32; WIDTH]) {
+    let (mut mask, mut t) = (0, [0.0; WIDTH]);
+    for (lane, t_lane) in t.iter_mut().enumerate().take(n) {
+        if let Some(tl) = test(lane) {
+            mask |= 1 << lane;
+            *t_lane = tl;
+        }
+    }
+    (mask, t)
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use sse::Sse;
+
+#[cfg(target_arch = "x86_64")]
+mod sse {
+    use super::*;
+    use crate::cpu::lanes::F32x4;
+
+    /// Corners of four triangles as lanes: `v[vertex][axis]`.
+    type Corners = [[F32x4; 3]; 3];
+
+    /// The stand-in for a lane without a triangle: NaN corners, which the test rejects on every
+    /// path (every comparison with NaN is false), as [`Tri4::EMPTY_BLOCK`]'s.
+    const NAN_TRIANGLE: [f32; 9] = [f32::NAN; 9];
+
+    /// The test over four SSE lanes.
+    pub(crate) struct Sse {
+        origin: [F32x4; 3],
+        shear: [F32x4; 3],
+        pub(crate) sheared: ShearedRay,
+    }
+
+    impl Sse {
+        #[inline(always)]
+        pub(crate) fn new(ray: &Ray) -> Self {
+            let sheared = ShearedRay::new(ray);
+            Self {
+                origin: ray.origin.to_array().map(F32x4::splat),
+                shear: [sheared.sx, sheared.sy, sheared.sz].map(F32x4::splat),
+                sheared,
+            }
+        }
+
+        /// [`ShearedRay::intersect`] on four triangles, operation for operation: `v(vertex, axis)`
+        /// reads one coordinate of the four, and `scalar(lane)` is the scalar test on one lane's
+        /// triangle, for lanes with an edge function exactly zero.
+        #[inline(always)]
+        fn test(
+            &self,
+            v: impl Fn(usize, usize) -> F32x4,
+            t_min: f32,
+            t_max: f32,
+            scalar: impl Fn(usize) -> Option<f32>,
+        ) -> (u32, [f32; WIDTH]) {
+            let r = &self.sheared;
+            let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+            self.test_axes(|k| (v(k, kx), v(k, ky), v(k, kz)), [kx, ky, kz], t_min, t_max, scalar)
+        }
+
+        /// [`Sse::test`] on corners read by `v(vertex)` as `(x, y, z)` in the ray's permuted axes `k`.
+        #[inline(always)]
+        fn test_axes(
+            &self,
+            v: impl Fn(usize) -> (F32x4, F32x4, F32x4),
+            [kx, ky, kz]: [usize; 3],
+            t_min: f32,
+            t_max: f32,
+            scalar: impl Fn(usize) -> Option<f32>,
+        ) -> (u32, [f32; WIDTH]) {
+            let [sx, sy, sz] = self.shear;
+            let corner = |k: usize| {
+                let (x, y, z) = v(k);
+                let (x, y, z) = (x - self.origin[kx], y - self.origin[ky], z - self.origin[kz]);
+                (x - sx * z, y - sy * z, z)
+            };
+            let (ax, ay, az) = corner(0);
+            let (bx, by, bz) = corner(1);
+            let (cx, cy, cz) = corner(2);
+            let u = cx * by - cy * bx;
+            let v = ax * cy - ay * cx;
+            let w = bx * ay - by * ax;
+            let zero = F32x4::splat(0.0);
+            let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
+            let outside = (u.lt(zero) | v.lt(zero) | w.lt(zero)) & (u.gt(zero) | v.gt(zero) | w.gt(zero));
+            // Most quadruples a ray meets it misses in every lane: stop before the division. A
+            // lane whose `u` is NaN (an empty lane) gets no `t` in the scalar test either.
+            if (!outside & u.eq(u)).bits() | on_edge == 0 {
+                return (0, [0.0; WIDTH]);
+            }
+            let det = u + v + w;
+            let t = (u * (sz * az) + v * (sz * bz) + w * (sz * cz)) / det;
+            let hit = !outside & det.ne(zero) & t.gt(F32x4::splat(t_min)) & t.lt(F32x4::splat(t_max));
+            let (mut mask, mut t) = (hit.bits(), t.to_array());
+            let mut edge = on_edge;
+            while edge != 0 {
+                let lane = edge.trailing_zeros() as usize;
+                edge &= edge - 1;
+                mask &= !(1 << lane);
+                if let Some(tl) = scalar(lane) {
+                    mask |= 1 << lane;
+                    t[lane] = tl;
+                }
+            }
+            (mask, t)
+        }
+    }
+
+    /// Four triangles of the soup as lanes: each read as three overlapping 4-float rows (floats
+    /// 0–3, 4–7 and 5–8 of its nine; all inside it) and the rows transposed; missing lanes NaN.
+    #[inline(always)]
+    fn gather(tris: &[Triangle], ids: &[u32]) -> Corners {
+        let floats: [&[f32; 9]; WIDTH] = std::array::from_fn(|lane| {
+            ids.get(lane).map_or(&NAN_TRIANGLE, |&id| bytemuck::cast_ref(&tris[id as usize]))
+        });
+        let rows = |at: usize| {
+            F32x4::transpose(floats.map(|f| {
+                let (row, _) = f[at..].split_first_chunk::<WIDTH>().unwrap_or((&NAN_TRIANGLE_ROW, &[]));
+                F32x4::load(row)
+            }))
+        };
+        let [ax, ay, az, bx] = rows(0);
+        let [by, bz, cx, cy] = rows(4);
+        let [_, _, _, cz] = rows(5);
+        [[ax, ay, az], [bx, by, bz], [cx, cy, cz]]
+    }
+
+    /// Unreachable stand-in for a row past a triangle's nine floats (`at` is at most 5).
+    const NAN_TRIANGLE_ROW: [f32; WIDTH] = [f32::NAN; WIDTH];
+
+    impl Sse {
+        #[inline(always)]
+        fn listed_axes<const KX: usize, const KY: usize, const KZ: usize>(
+            &self,
+            tris: &[Triangle],
+            ids: &[u32],
+            t_min: f32,
+            t_max: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            let v = gather(tris, ids);
+            let scalar = |lane: usize| self.sheared.intersect(&tris[ids[lane] as usize], t_min, t_max);
+            self.test_axes(|k| (v[k][KX], v[k][KY], v[k][KZ]), [KX, KY, KZ], t_min, t_max, scalar)
+        }
+    }
+
+    impl TriangleLanes for Sse {
+        #[inline(always)]
+        fn block(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+            let v = |k: usize, a: usize| F32x4::load(&block.v[k][a]);
+            self.test(v, t_min, t_max, |lane| self.sheared.intersect(&block.triangle(lane), t_min, t_max))
+        }
+
+        /// Dispatched once per quadruple to a copy with constant axes, as the scalar test is, so
+        /// the gathered corners stay in registers instead of being indexed through memory.
+        #[inline(always)]
+        fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+            let r = &self.sheared;
+            match (r.kx, r.ky, r.kz) {
+                (1, 2, 0) => self.listed_axes::<1, 2, 0>(tris, ids, t_min, t_max),
+                (2, 1, 0) => self.listed_axes::<2, 1, 0>(tris, ids, t_min, t_max),
+                (2, 0, 1) => self.listed_axes::<2, 0, 1>(tris, ids, t_min, t_max),
+                (0, 2, 1) => self.listed_axes::<0, 2, 1>(tris, ids, t_min, t_max),
+                (0, 1, 2) => self.listed_axes::<0, 1, 2>(tris, ids, t_min, t_max),
+                _ => self.listed_axes::<1, 0, 2>(tris, ids, t_min, t_max),
+            }
+        }
+    }
+}
