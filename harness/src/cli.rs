@@ -332,8 +332,8 @@ pub struct CompareArgs {
     /// Overrides --thresholds. Metrics and defaults: bytes, components, nodes, pointers 1e-9;
     /// triangles, hit_mismatches, prim_mismatches, rays_at_bound exact; steps_per_ray, visits_per_ray,
     /// tests_per_ray, hit_fraction 1e-6; render 0.35 and build 1.0 per case (ratios to the
-    /// reference, judged on their 95 % bootstrap interval); render_geomean, build_geomean 0.15 per
-    /// structure; render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter times are
+    /// reference, judged on their 95 % bootstrap interval); render_geomean 0.15 and build_geomean 0.25
+    /// per structure; render_raw, build_raw 0.5 (no reference); timing_floor_ms 1 (shorter times are
     /// shown, not gated); probe_tolerance 0.25 (machines comparable for --timing-gate auto).
     #[arg(long = "threshold", value_name = "METRIC=FRACTION")]
     pub thresholds: Vec<String>,

@@ -36,9 +36,13 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     // slowed by over 35 % or its build surely doubled.
     ("render", Kind::Timing, 0.35),
     ("build", Kind::Timing, 1.0),
-    // Per structure over all scenes: unchanged reruns stayed within 5 %.
+    // Per structure over all scenes: unchanged reruns kept renders within 14 %. Builds get more
+    // room: the voxel structures' builds are the shared voxeliser's, 4–55 ms of allocation-heavy
+    // work on the ci scenes, and unchanged code moved their geomean by +15 % to +18 % against the
+    // baseline (svo, svdag, vdb; 2026-12, on probes that agreed) — at 15 % that failed the gate
+    // with no change; a structure 1.3× slower still fails.
     ("render_geomean", Kind::Timing, 0.15),
-    ("build_geomean", Kind::Timing, 0.15),
+    ("build_geomean", Kind::Timing, 0.25),
     ("render_raw", Kind::Timing, 0.5),
     ("build_raw", Kind::Timing, 0.5),
     ("timing_floor_ms", Kind::Setting, 1.0),
