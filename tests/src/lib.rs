@@ -156,6 +156,23 @@ pub fn compare_with_answers(accel: &dyn Traverse, rays: &[TestRay], answers: &[(
 }
 
 /// A scene holding exactly `triangles` (three vertices each), for tests on hand-made geometry.
+/// `n` triangles in the plane z = 1 (exact in f32), of random sizes and turns, all overlapping
+/// around the origin: a ray through the overlap meets many of them, at equal `t` where its
+/// direction is -Z — the tie rule's test (equal `t` → the smaller triangle index).
+pub fn coplanar_stack(n: usize, rng: &mut Pcg64Mcg) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let r = rng.random_range(0.5f32..4.0);
+            let a = rng.random_range(0.0f32..std::f32::consts::TAU);
+            let (cx, cy) = (rng.random_range(-0.4f32..0.4), rng.random_range(-0.4f32..0.4));
+            std::array::from_fn(|k| {
+                let phi = a + k as f32 * 2.1;
+                Vec3::new(cx + r * phi.cos(), cy + r * phi.sin(), 1.0)
+            })
+        })
+        .collect()
+}
+
 pub fn scene_of(name: &str, triangles: &[Triangle]) -> Scene {
     let mut mesh = scenes::Mesh::new(name, "test");
     for tri in triangles {

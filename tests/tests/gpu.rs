@@ -347,3 +347,49 @@ fn kdtree_and_octree_variants() {
     }
     assert!(failures.is_empty(), "kd-tree/octree variants differ from the CPU:\n{}", failures.join("\n"));
 }
+
+/// The tie rule on the GPU: over a stack of coplanar triangles seen head-on, where many pixels
+/// meet several triangles at exactly equal `t`, every triangle kernel's WGSL twin reports the
+/// triangle its CPU kernel does (the smallest index among the nearest), pixel for pixel.
+#[test]
+fn ties_go_to_the_smaller_index_on_the_gpu() {
+    use rand::SeedableRng;
+    let Some(ctx) = context_for_tests("gpu::ties_go_to_the_smaller_index_on_the_gpu") else {
+        return;
+    };
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(30);
+    let scene = tests::scene_of("coplanar-stack", &tests::coplanar_stack(300, &mut rng));
+    let spec = scenes::CameraSpec {
+        eye: glam::Vec3::new(0.0, 0.0, 3.0),
+        target: glam::Vec3::new(0.0, 0.0, 1.0),
+        up: glam::Vec3::Y,
+        vfov_deg: 20.0,
+    };
+    let camera = Camera::new(spec, SIZE, SIZE);
+    let triangles = scene.triangles();
+    let ties = (0..SIZE * SIZE)
+        .filter(|i| {
+            let ray = camera.ray(i % SIZE, i / SIZE);
+            kernels::cpu::brute_force::nearest_set(&triangles, &ray, 0.0, f32::INFINITY).1.len() > 1
+        })
+        .count();
+    assert!(ties > (SIZE * SIZE / 100) as usize, "only {ties} pixels meet equal distances: ties are not tested");
+    let mut failures = Vec::new();
+    for name in ["bvh", "ug", "rg", "rg2", "org", "kdtree", "octree"] {
+        let params = Params::default();
+        let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
+        let accel = kernels::build_structure(name, &input).expect("registered").expect("builds");
+        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+        let shade = ShadeContext::for_scene(&scene, 0);
+        let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
+        let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .expect("a GPU program");
+        let d = diff(&gpu.frame, &cpu);
+        eprintln!("gpu ties {name:<8} {ties} tied pixels; {d:?}");
+        if d.hit_mismatches + d.prim_mismatches > 0 || d.max_rel_t > 0.0 {
+            failures.push(format!("{name}: {d:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "GPU hits differ from the CPU's on ties:\n{}", failures.join("\n"));
+}

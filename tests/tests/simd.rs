@@ -40,7 +40,12 @@ fn key(hit: Option<Hit>) -> Key {
 
 /// Every ray's hit equals brute force's (`brute_force::intersect`: the nearest `t`, the lowest
 /// index among equal ones) exactly. Returns the rays that hit.
-fn assert_brute_force(bvh: &Bvh4, triangles: &[Triangle], rays: &[Ray], what: &str) -> usize {
+fn assert_brute_force(
+    bvh: &(impl Traverse + Sync + ?Sized),
+    triangles: &[Triangle],
+    rays: &[Ray],
+    what: &str,
+) -> usize {
     let wrong: Vec<(usize, Key, Key)> = rays
         .par_iter()
         .enumerate()
@@ -183,25 +188,12 @@ mod grids {
 /// rays through the overlap hit many of them at equal `t` (the plane z = 1 is exact in f32 and
 /// axis-parallel rays make every triangle's `t` the same float), and whichever leaf the traversal
 /// opens first, the lowest index must win, as in brute force.
-#[test]
-fn equal_distances_go_to_the_smaller_triangle_index() {
+/// 300 coplanar triangles overlapping around one point, and 4,000 rays through the overlap (half
+/// axis-parallel, half nearly so), more than half of which meet several triangles at equal `t`.
+fn coplanar_stack() -> (Scene, Vec<Ray>) {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(30);
-    let triangles: Vec<Triangle> = (0..300)
-        .map(|_| {
-            let r = rng.random_range(0.5f32..4.0);
-            let a = rng.random_range(0.0f32..std::f32::consts::TAU);
-            let (cx, cy) = (rng.random_range(-0.4f32..0.4), rng.random_range(-0.4f32..0.4));
-            std::array::from_fn(|k| {
-                let phi = a + k as f32 * 2.1;
-                glam::Vec3::new(cx + r * phi.cos(), cy + r * phi.sin(), 1.0)
-            })
-        })
-        .collect();
-    let scene = tests::scene_of("coplanar-stack", &triangles);
-    let triangles = scene.triangles();
-    let bvh = build(&scene, triangles.clone());
-    assert!(bvh.blocks.len() > 20, "the stack spreads over many leaves: {} blocks", bvh.blocks.len());
+    let scene = tests::scene_of("coplanar-stack", &tests::coplanar_stack(300, &mut rng));
     let rays: Vec<Ray> = (0..4000)
         .map(|i| {
             let (x, y) = (rng.random_range(-0.3f32..0.3), rng.random_range(-0.3f32..0.3));
@@ -209,9 +201,60 @@ fn equal_distances_go_to_the_smaller_triangle_index() {
             Ray::new(glam::Vec3::new(x, y, 3.0), dir)
         })
         .collect();
+    let triangles = scene.triangles();
     let ties = rays.iter().filter(|r| brute_force::nearest_set(&triangles, r, 0.0, f32::INFINITY).1.len() > 1).count();
     assert!(ties > rays.len() / 2, "only {ties} rays meet equal distances: the test is not testing ties");
+    (scene, rays)
+}
+
+#[test]
+fn equal_distances_go_to_the_smaller_triangle_index() {
+    let (scene, rays) = coplanar_stack();
+    let triangles = scene.triangles();
+    let bvh = build(&scene, triangles.clone());
+    assert!(bvh.blocks.len() > 20, "the stack spreads over many leaves: {} blocks", bvh.blocks.len());
     assert_brute_force(&bvh, &triangles, &rays, "coplanar stack");
+}
+
+/// The tie rule in every triangle kernel, scalar and four lanes at a time: on the coplanar stack
+/// each gives brute force's hit — the same `t` and the smallest index among equally near triangles.
+#[test]
+fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
+    let (scene, rays) = coplanar_stack();
+    let triangles = scene.triangles();
+    let cases: &[(&str, &[&str])] = &[
+        ("bvh", &[]),
+        ("ug", &[]),
+        ("ug", &["simd=scalar"]),
+        ("rg", &[]),
+        ("rg", &["simd=scalar"]),
+        ("rg2", &[]),
+        ("org", &[]),
+        ("org", &["simd=scalar"]),
+        ("octree", &[]),
+        ("octree", &["simd=scalar"]),
+        ("octree", &["octree.mailbox=off"]),
+        ("kdtree", &[]),
+        ("kdtree", &["kdtree.traversal=restart"]),
+    ];
+    let wrong: Vec<String> = cases
+        .iter()
+        .filter_map(|&(name, given)| {
+            let params = Params::parse(given.iter().copied()).expect("parses");
+            let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
+            let accel =
+                kernels::build_structure(name, &input).expect("registered").unwrap_or_else(|e| panic!("{name}: {e}"));
+            let differ = rays
+                .iter()
+                .filter(|r| {
+                    key(accel.intersect(r, 0.0, f32::INFINITY))
+                        != key(brute_force::intersect(&triangles, r, 0.0, f32::INFINITY))
+                })
+                .count();
+            (differ > 0).then(|| format!("{name} {given:?}: {differ} of {} rays", rays.len()))
+        })
+        .collect();
+    assert!(wrong.is_empty(), "hits other than brute force's on the coplanar stack:\n{}", wrong.join("\n"));
 }
 
 /// `validate` rejects each kind of corruption the kernel relies on being absent.

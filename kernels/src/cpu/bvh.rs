@@ -53,9 +53,13 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
         stats.visit();
         let n = &bvh.nodes[node];
         if n.is_leaf() {
+            // The tie rule: an equal `t` from a smaller triangle index wins too, so the hit is
+            // brute force's whatever order the leaves are visited in (`tie_limit`).
             for &r in &bvh.refs[n.first as usize..(n.first + n.count) as usize] {
                 stats.prim_test();
-                if let Some(t) = sheared.intersect(&bvh.triangles[r as usize], t_min, best_t) {
+                if let Some(t) = sheared.intersect(&bvh.triangles[r as usize], t_min, tie_limit(best_t, best_prim))
+                    && (t < best_t || r < best_prim)
+                {
                     best_t = t;
                     cull_t = t * CULL_MARGIN;
                     best_prim = r;
@@ -95,6 +99,16 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
 }
 
 /// Pops the next subtree of an ordered traversal's stack of `(subtree, entry t)` that can still
+/// The far end of the triangle tests' interval under the tie rule (equal `t` → the smaller
+/// triangle index): `best_t` while there is no hit, then one ulp past it, so that a hit at
+/// exactly `best_t` is reported and the caller keeps it only if its index is smaller. `best_t` is
+/// then a finite hit distance above `t_min ≥ 0`, so the next float up is the next bit pattern
+/// (what `bvh.wgsl` computes).
+#[inline(always)]
+pub(crate) fn tie_limit(best_t: f32, best_prim: u32) -> f32 {
+    if best_prim == u32::MAX { best_t } else { best_t.next_up() }
+}
+
 /// hold a hit nearer than `cull_t`, skipping those entered beyond it; `None` when none is left.
 /// Shared by the binary and the 4-wide BVH kernels.
 #[inline(always)]

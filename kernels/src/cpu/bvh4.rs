@@ -17,7 +17,7 @@ use structures::bvh4::Bvh4;
 use structures::bvh4::layout::{Bvh4Node, NO_PRIM, WIDTH, is_leaf, leaf_blocks};
 use structures::simd::Isa;
 
-use super::bvh::{CULL_MARGIN, pop_nearer};
+use super::bvh::{CULL_MARGIN, pop_nearer, tie_limit};
 use super::slab;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, TriangleLanes};
@@ -219,9 +219,8 @@ fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
                     }
                 }
                 // Up to the best hit inclusive once there is one: an equal `t` with a smaller
-                // triangle index still wins.
-                let limit = if best_prim == NO_PRIM { best_t } else { best_t.next_up() };
-                let (mut mask, t) = tris.block(block, t_min, limit);
+                // triangle index still wins (the tie rule, as the reference's).
+                let (mut mask, t) = tris.block(block, t_min, tie_limit(best_t, best_prim));
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
