@@ -79,15 +79,31 @@ fn simd(case: &Case) -> Option<&str> {
     case.params.get("simd").and_then(|v| v.as_str())
 }
 
+/// Whether two cases ran with the same parameters apart from `simd` (so `org [fast]` is not
+/// compared with the paper's `org [scalar]`).
+fn same_but_simd(a: &Case, b: &Case) -> bool {
+    let others = |c: &Case| {
+        let mut p = c.params.clone();
+        if let Some(map) = p.as_object_mut() {
+            map.remove("simd");
+        }
+        p
+    };
+    others(a) == others(b)
+}
+
 /// Each SIMD kernel's speed-up over its own scalar form (issue 30: similar factors across
 /// families rule out an implementation confound): for every case run with `simd=scalar`, the
-/// case of the same structure, resolution and machine that ran an instruction set, row by row,
+/// case of the same structure, resolution, machine and other parameters that ran an instruction set, row by row,
 /// as the ratio of their speeds over `bvh` (paired timings where they exist).
 pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
     let mut lines = Vec::new();
     for scalar in cases.iter().filter(|c| simd(c) == Some("scalar")) {
         let same = |c: &&&Case| {
-            c.structure == scalar.structure && c.resolution == scalar.resolution && c.machine == scalar.machine
+            c.structure == scalar.structure
+                && c.resolution == scalar.resolution
+                && c.machine == scalar.machine
+                && same_but_simd(c, scalar)
         };
         for fast in cases.iter().filter(same) {
             let Some(isa) = simd(fast).filter(|&isa| isa != "scalar") else { continue };
@@ -173,7 +189,10 @@ mod tests {
         let fast = with(case("bvh4", 4.0, Some(8.0), 9.0), "sse4", None);
         let slow = with(case("bvh4", 10.0, Some(6.0), 2.0), "scalar", Some("scalar"));
         let other = with(case("org", 5.0, Some(5.0), 3.0), "sse4", None);
-        let notes = simd_notes(&[&bvh, &fast, &slow, &other]);
+        // The same structure with another parameter changed besides `simd` is not its scalar form.
+        let mut tuned = with(case("bvh4", 3.0, Some(8.0), 9.0), "sse4", Some("fast"));
+        tuned.params["bvh.preset"] = "fast".into();
+        let notes = simd_notes(&[&bvh, &fast, &slow, &other, &tuned]);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(
             notes[0].starts_with("bvh4 cpu/primary: SIMD (sse4) 3.33× its scalar form `bvh4 [scalar]`"),
