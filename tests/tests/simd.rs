@@ -40,12 +40,7 @@ fn key(hit: Option<Hit>) -> Key {
 
 /// Every ray's hit equals brute force's (`brute_force::intersect`: the nearest `t`, the lowest
 /// index among equal ones) exactly. Returns the rays that hit.
-fn assert_brute_force(
-    bvh: &(impl Traverse + Sync + ?Sized),
-    triangles: &[Triangle],
-    rays: &[Ray],
-    what: &str,
-) -> usize {
+fn assert_brute_force(bvh: &(impl Traverse + ?Sized), triangles: &[Triangle], rays: &[Ray], what: &str) -> usize {
     let wrong: Vec<(usize, Key, Key)> = rays
         .par_iter()
         .enumerate()

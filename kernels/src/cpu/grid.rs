@@ -43,11 +43,10 @@
 
 use scenes::{Camera, Ray};
 use structures::grid::{BRICK_SHIFT, Grid, GridHeader, SUBGRID_BIT};
-use structures::simd::Isa;
 
 use super::slab;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, TriangleLanes};
+use super::triangle4::{self, LaneWalk, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -348,24 +347,25 @@ fn walk<T: TriangleLanes, S: Stats>(
     nearest_hit(&grid.triangles, best_t, best_prim)
 }
 
-/// The walk with SSE4.1 enabled throughout, each cell's triangles tested four at a time.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "sse4.1")]
-fn trace_sse4<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    walk(grid, ray, &triangle4::Sse::new(ray), t_min, t_max, stats)
+/// The walk of one ray, for [`triangle4::run_on`].
+struct GridWalk<'a, S> {
+    grid: &'a Grid,
+    ray: &'a Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &'a mut S,
 }
 
-/// Runs the walk on the instruction set the grid was resolved to.
-#[allow(unsafe_code)]
-fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    match grid.isa.isa() {
-        // SAFETY: `trace_sse4` needs SSE4.1. `Grid::isa` is a `structures::simd::Resolved`,
-        // which holds `Sse4` only where `is_x86_feature_detected!("sse4.1")` found it, so this CPU has it.
-        // Exercised by tests/tests/simd.rs on every built-in scene.
-        #[cfg(target_arch = "x86_64")]
-        Isa::Sse4 => unsafe { trace_sse4(grid, ray, t_min, t_max, stats) },
-        _ => walk(grid, ray, &triangle4::Scalar::new(ray), t_min, t_max, stats),
+impl<S: Stats> LaneWalk for GridWalk<'_, S> {
+    #[inline(always)]
+    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
+        walk(self.grid, self.ray, tris, self.t_min, self.t_max, self.stats)
     }
+}
+
+/// Runs the walk with the triangle tests of the instruction set the grid was resolved to.
+fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    triangle4::run_on(grid.isa, ray, GridWalk { grid, ray, t_min, t_max, stats })
 }
 
 impl Traverse for Grid {

@@ -26,12 +26,11 @@
 use scenes::{Camera, Ray};
 use structures::bvh4::layout::WIDTH;
 use structures::octree::{MAX_DEPTH, TriOctree, layout};
-use structures::simd::Isa;
 
 use super::kdtree::MARGIN;
 use super::slab;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, TriangleLanes};
+use super::triangle4::{self, LaneWalk, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
 
@@ -122,27 +121,28 @@ impl Frame {
     }
 }
 
-/// The walk with SSE4.1 enabled throughout, a leaf's triangles tested four at a time.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "sse4.1")]
-fn trace_sse4<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    walk(tree, ray, &triangle4::Sse::new(ray), t_min, t_max, stats)
+/// The walk of one ray, for [`triangle4::run_on`].
+struct OctreeWalk<'a, S> {
+    tree: &'a TriOctree,
+    ray: &'a Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &'a mut S,
 }
 
-/// Runs the walk on the instruction set the octree was resolved to.
-#[allow(unsafe_code)]
+impl<S: Stats> LaneWalk for OctreeWalk<'_, S> {
+    #[inline(always)]
+    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
+        walk(self.tree, self.ray, tris, self.t_min, self.t_max, self.stats)
+    }
+}
+
+/// Runs the walk with the triangle tests of the instruction set the octree was resolved to.
 fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if !ray_is_traceable(ray, t_min, t_max) {
         return None;
     }
-    match tree.params.simd.isa() {
-        // SAFETY: `trace_sse4` needs SSE4.1. `OctreeParams::simd` is a `structures::simd::Resolved`,
-        // which holds `Sse4` only where `is_x86_feature_detected!("sse4.1")` found it, so this CPU has it.
-        // Exercised by tests/tests/simd.rs on every built-in scene.
-        #[cfg(target_arch = "x86_64")]
-        Isa::Sse4 => unsafe { trace_sse4(tree, ray, t_min, t_max, stats) },
-        _ => walk(tree, ray, &triangle4::Scalar::new(ray), t_min, t_max, stats),
-    }
+    triangle4::run_on(tree.params.simd, ray, OctreeWalk { tree, ray, t_min, t_max, stats })
 }
 
 /// The parametric walk, testing the triangles of each leaf it reaches with `tris`: those not in

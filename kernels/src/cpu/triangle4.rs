@@ -14,8 +14,32 @@
 
 use scenes::{Ray, Triangle};
 use structures::bvh4::layout::{Tri4, WIDTH};
+use structures::simd::{Isa, Resolved};
 
 use super::triangle::ShearedRay;
+use crate::Hit;
+
+/// A kernel's traversal, written once over any [`TriangleLanes`], handed to [`run_on`] to run
+/// with the triangle tests of the structure's instruction set.
+pub(crate) trait LaneWalk {
+    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit>;
+}
+
+/// Runs `walk` for `ray` with the triangle tests of `isa`: four SSE lanes (the whole walk
+/// compiled with SSE4.1) or the scalar test one triangle at a time.
+#[allow(unsafe_code)]
+#[inline(always)]
+pub(crate) fn run_on<W: LaneWalk>(isa: Resolved, ray: &Ray, walk: W) -> Option<Hit> {
+    match isa.isa() {
+        // SAFETY: `walk_sse4` needs SSE4.1. A `structures::simd::Resolved` holds `Sse4` only
+        // where `is_x86_feature_detected!("sse4.1")` found it (its field is private, and its only
+        // constructors resolve against detection), so this CPU has it. Exercised on every
+        // built-in scene by tests/tests/simd.rs (the grids and the triangle octree).
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse4 => unsafe { sse::walk_sse4(ray, walk) },
+        _ => walk.walk(&Scalar::new(ray)),
+    }
+}
 
 /// The tests of a kernel's triangles, four lanes at a time.
 pub(crate) trait TriangleLanes {
@@ -209,6 +233,12 @@ mod sse {
         let [by, bz, cx, cy] = rows(4);
         let [_, _, _, cz] = rows(5);
         [[ax, ay, az], [bx, by, bz], [cx, cy, cz]]
+    }
+
+    /// `walk` with SSE4.1 enabled throughout, its triangles tested four at a time.
+    #[target_feature(enable = "sse4.1")]
+    pub(super) fn walk_sse4<W: LaneWalk>(ray: &Ray, walk: W) -> Option<Hit> {
+        walk.walk(&Sse::new(ray))
     }
 
     /// Unreachable stand-in for a row past a triangle's nine floats (`at` is at most 5).
