@@ -90,7 +90,11 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
                 (None, None) => {}
             }
         }
-        match pop_nearer(&stack, &mut sp, cull_t, stats) {
+        let pop = || {
+            sp = sp.checked_sub(1)?;
+            Some(stack[sp])
+        };
+        match pop_nearer(pop, cull_t, stats) {
             Some(next) => node = next as usize,
             None => break 'traverse,
         }
@@ -98,7 +102,6 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
     nearest_hit(&bvh.triangles, best_t, best_prim)
 }
 
-/// Pops the next subtree of an ordered traversal's stack of `(subtree, entry t)` that can still
 /// The far end of the triangle tests' interval under the tie rule (equal `t` → the smaller
 /// triangle index): `best_t` while there is no hit, then one ulp past it, so that a hit at
 /// exactly `best_t` is reported and the caller keeps it only if its index is smaller. `best_t` is
@@ -109,14 +112,17 @@ pub(crate) fn tie_limit(best_t: f32, best_prim: u32) -> f32 {
     if best_prim == u32::MAX { best_t } else { best_t.next_up() }
 }
 
-/// hold a hit nearer than `cull_t`, skipping those entered beyond it; `None` when none is left.
-/// Shared by the binary and the 4-wide BVH kernels.
+/// Pops the next subtree of an ordered traversal's stack of `(subtree, entry t)` (`pop` takes
+/// one entry off) that can still hold a hit nearer than `cull_t`, skipping those entered beyond
+/// it; `None` when none is left. Shared by the binary and the 4-wide BVH kernels.
 #[inline(always)]
-pub(crate) fn pop_nearer<S: Stats>(stack: &[(u32, f32)], sp: &mut usize, cull_t: f32, stats: &mut S) -> Option<u32> {
-    while *sp > 0 {
-        *sp -= 1;
+pub(crate) fn pop_nearer<S: Stats>(
+    mut pop: impl FnMut() -> Option<(u32, f32)>,
+    cull_t: f32,
+    stats: &mut S,
+) -> Option<u32> {
+    while let Some((next, t_entry)) = pop() {
         stats.pop();
-        let (next, t_entry) = stack[*sp];
         if t_entry <= cull_t {
             return Some(next);
         }

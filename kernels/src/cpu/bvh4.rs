@@ -19,6 +19,7 @@ use structures::simd::Isa;
 
 use super::bvh::{CULL_MARGIN, pop_nearer, tie_limit};
 use super::slab;
+use super::stack::Stack;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, TriangleLanes};
 use crate::gpu::GpuProgram;
@@ -33,11 +34,6 @@ const fn stack_entries(depth: usize) -> usize {
 /// The stack of any tree: no deeper than the reference BVH2 it was collapsed from (each wide
 /// level consumes at least one binary level).
 const DEEPEST: usize = stack_entries(structures::bvh::MAX_DEPTH);
-
-/// The stack of every tree up to 21 nodes deep (every built-in scene's), a quarter of
-/// [`DEEPEST`]: the stack is zeroed per ray, and 2.3 KB of zeroing was a sixth of a primary ray's
-/// time on the dragon.
-const SHALLOW: usize = stack_entries(21);
 
 /// The box test of a traversal step, over the four slots of a node (the leaf blocks' triangles
 /// are tested by [`TriangleLanes`]).
@@ -80,36 +76,34 @@ mod sse {
     use crate::cpu::lanes::F32x4;
     use crate::cpu::triangle4::Sse;
 
-    /// The slab test over 4 SSE lanes.
-    struct SseBoxes {
+    /// The slab test over 4 SSE lanes, for rays of one octant: bit `a` of `NEGATIVE` set when
+    /// the direction is negative on axis `a`, so boxes are entered through their upper bounds
+    /// there. A constant, so picking the near and far planes costs no instruction per node.
+    struct SseBoxes<const NEGATIVE: u8> {
         origin: [F32x4; 3],
         inv: [F32x4; 3],
-        /// Per axis: the direction is negative, so a box is entered through its upper bound.
-        negative: [bool; 3],
         robust_far: F32x4,
     }
 
-    impl SseBoxes {
+    impl<const NEGATIVE: u8> SseBoxes<NEGATIVE> {
         #[inline(always)]
-        fn new(ray: &Ray) -> Self {
-            let inv = slab::reciprocal(ray.dir);
+        fn new(origin: [f32; 3], inv: [f32; 3]) -> Self {
             Self {
-                origin: ray.origin.to_array().map(F32x4::splat),
+                origin: origin.map(F32x4::splat),
                 inv: inv.map(F32x4::splat),
-                negative: inv.map(|i| i < 0.0),
                 robust_far: F32x4::splat(slab::ROBUST_FAR),
             }
         }
     }
 
-    impl BoxLanes for SseBoxes {
+    impl<const NEGATIVE: u8> BoxLanes for SseBoxes<NEGATIVE> {
         /// [`slab::interval`] on four boxes: `max_sel`/`min_sel` are its `if tn > t0` / `if tf < t1`.
         #[inline(always)]
         fn boxes(&self, node: &Bvh4Node, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
             let (mut t0, mut t1) = (F32x4::splat(t_min), F32x4::splat(t_max));
             for a in 0..3 {
                 let (near, far) =
-                    if self.negative[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+                    if NEGATIVE & (1 << a) != 0 { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
                 let tn = (F32x4::load(near) - self.origin[a]) * self.inv[a];
                 let tf = (F32x4::load(far) - self.origin[a]) * self.inv[a] * self.robust_far;
                 t0 = tn.max_sel(t0);
@@ -119,27 +113,22 @@ mod sse {
         }
     }
 
-    /// The traversal with SSE4.1 enabled throughout.
+    /// The traversal with SSE4.1 enabled throughout, compiled once per octant of directions.
     #[target_feature(enable = "sse4.1")]
     pub(super) fn trace_sse4<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-        walk_sized(bvh, &SseBoxes::new(ray), &Sse::new(ray), t_min, t_max, stats)
-    }
-}
-
-/// [`walk`] with the smallest stack the tree's depth allows.
-#[inline(always)]
-fn walk_sized<B: BoxLanes, T: TriangleLanes, S: Stats>(
-    bvh: &Bvh4,
-    boxes: &B,
-    tris: &T,
-    t_min: f32,
-    t_max: f32,
-    stats: &mut S,
-) -> Option<Hit> {
-    if stack_entries(bvh.depth) <= SHALLOW {
-        walk::<_, _, _, SHALLOW>(bvh, boxes, tris, t_min, t_max, stats)
-    } else {
-        walk::<_, _, _, DEEPEST>(bvh, boxes, tris, t_min, t_max, stats)
+        let (origin, inv) = (ray.origin.to_array(), slab::reciprocal(ray.dir));
+        let tris = Sse::new(ray);
+        let octant = (0..3).fold(0u8, |o, a| o | (u8::from(inv[a] < 0.0) << a));
+        match octant {
+            0 => walk(bvh, &SseBoxes::<0>::new(origin, inv), &tris, t_min, t_max, stats),
+            1 => walk(bvh, &SseBoxes::<1>::new(origin, inv), &tris, t_min, t_max, stats),
+            2 => walk(bvh, &SseBoxes::<2>::new(origin, inv), &tris, t_min, t_max, stats),
+            3 => walk(bvh, &SseBoxes::<3>::new(origin, inv), &tris, t_min, t_max, stats),
+            4 => walk(bvh, &SseBoxes::<4>::new(origin, inv), &tris, t_min, t_max, stats),
+            5 => walk(bvh, &SseBoxes::<5>::new(origin, inv), &tris, t_min, t_max, stats),
+            6 => walk(bvh, &SseBoxes::<6>::new(origin, inv), &tris, t_min, t_max, stats),
+            _ => walk(bvh, &SseBoxes::<7>::new(origin, inv), &tris, t_min, t_max, stats),
+        }
     }
 }
 
@@ -148,7 +137,7 @@ fn walk_sized<B: BoxLanes, T: TriangleLanes, S: Stats>(
 /// starts beyond the best hit (with the reference's [`CULL_MARGIN`]). The loop needs no counter:
 /// every inner child lies after its parent (`Bvh4::validate`), so no node is visited twice.
 #[inline(always)]
-fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
+fn walk<B: BoxLanes, T: TriangleLanes, S: Stats>(
     bvh: &Bvh4,
     boxes: &B,
     tris: &T,
@@ -159,8 +148,7 @@ fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
     let mut best_t = t_max;
     let mut best_prim = NO_PRIM;
     let mut cull_t = t_max;
-    let mut stack = [(0u32, 0f32); STACK];
-    let mut sp = 0usize;
+    let mut stack = Stack::<(u32, f32), DEEPEST>::new();
     let mut cur = 0u32;
     'traverse: loop {
         stats.step();
@@ -180,8 +168,7 @@ fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
                     // (ties in slot order, as the sort below).
                     let second = rest.trailing_zeros() as usize;
                     let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
-                    stack[sp] = (node.child[far], t[far]);
-                    sp += 1;
+                    stack.push((node.child[far], t[far]));
                     stats.push();
                     cur = node.child[near];
                     continue 'traverse;
@@ -203,8 +190,7 @@ fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
                     n += 1;
                 }
                 for &(t_entry, child) in order[1..n].iter().rev() {
-                    stack[sp] = (child, t_entry);
-                    sp += 1;
+                    stack.push((child, t_entry));
                     stats.push();
                 }
                 cur = order[0].1;
@@ -235,7 +221,7 @@ fn walk<B: BoxLanes, T: TriangleLanes, S: Stats, const STACK: usize>(
                 cull_t = best_t * CULL_MARGIN;
             }
         }
-        match pop_nearer(&stack, &mut sp, cull_t, stats) {
+        match pop_nearer(|| stack.pop(), cull_t, stats) {
             Some(next) => cur = next,
             None => break 'traverse,
         }
@@ -255,7 +241,7 @@ fn trace<S: Stats>(bvh: &Bvh4, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S)
         // Exercised by tests/tests/simd.rs on every built-in scene.
         #[cfg(target_arch = "x86_64")]
         Isa::Sse4 => unsafe { sse::trace_sse4(bvh, ray, t_min, t_max, stats) },
-        _ => walk_sized(bvh, &ScalarBoxes::new(ray), &triangle4::Scalar::new(ray), t_min, t_max, stats),
+        _ => walk(bvh, &ScalarBoxes::new(ray), &triangle4::Scalar::new(ray), t_min, t_max, stats),
     }
 }
 

@@ -45,6 +45,7 @@ use scenes::{Camera, Ray};
 use structures::grid::{BRICK_SHIFT, Grid, GridHeader, SUBGRID_BIT};
 
 use super::slab;
+use super::stack::Stack;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, LaneWalk, TriangleLanes};
 use crate::gpu::GpuProgram;
@@ -92,7 +93,7 @@ struct DdaRay {
 /// the linear index of `cell` among the grid's cells (or bricks), moved by `delta[a]` per step, so
 /// no step multiplies. `t_next[a]` is where the ray leaves the current unit on axis `a` (`+inf` on
 /// an axis that never steps).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Level {
     header: u32,
     shift: u32,
@@ -274,8 +275,7 @@ fn walk<T: TriangleLanes, S: Stats>(
     let mut cull_t = cull_bound(t_max);
     let mut best_prim = u32::MAX;
     // The DDAs the current one was entered from, innermost last.
-    let mut stack = [Level::default(); STACK];
-    let mut sp = 0usize;
+    let mut stack = Stack::<Level, STACK>::new();
     let mut cur = dda.enter(grid, 0, t_enter);
     let mut h = top;
     let mut guard = 0u32;
@@ -289,9 +289,7 @@ fn walk<T: TriangleLanes, S: Stats>(
         if cur.shift != 0 {
             // A brick: step over it when empty, else run the DDA of its cells over its span.
             if occupied(grid, h, cur.index) {
-                let Some(slot) = stack.get_mut(sp) else { panic!("grid DDA stack overflow") };
-                *slot = cur;
-                sp += 1;
+                stack.push(cur);
                 cur = dda.enter_brick(h, &cur);
                 continue 'traverse;
             }
@@ -303,11 +301,9 @@ fn walk<T: TriangleLanes, S: Stats>(
                 && link & SUBGRID_BIT != 0
             {
                 // PUSH: the sub-grid covers exactly this cell; run its DDA over this cell's span.
-                let Some(slot) = stack.get_mut(sp) else {
+                if !stack.try_push(cur) {
                     panic!("grid hierarchy deeper than MAX_DEPTH = {MAX_DEPTH} levels");
-                };
-                *slot = cur;
-                sp += 1;
+                }
                 stats.push();
                 let sub = link & !SUBGRID_BIT;
                 h = &grid.headers[sub as usize];
@@ -332,12 +328,9 @@ fn walk<T: TriangleLanes, S: Stats>(
             if dda.advance(h, &mut cur) {
                 continue 'traverse;
             }
-            if sp == 0 {
-                break 'traverse;
-            }
-            sp -= 1;
-            let leaving_grid = cur.header != stack[sp].header;
-            cur = stack[sp];
+            let Some(below) = stack.pop() else { break 'traverse };
+            let leaving_grid = cur.header != below.header;
+            cur = below;
             if leaving_grid {
                 stats.pop();
                 h = &grid.headers[cur.header as usize];

@@ -16,6 +16,7 @@ pub mod octree_cast;
 pub mod octree_ray;
 pub mod render;
 pub mod slab;
+mod stack;
 pub mod svdag;
 pub mod svdag_shadow;
 pub mod svo;
