@@ -217,7 +217,13 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                 }
                 GridKind::Rg2 => (8.0 * refs, (8.0 * refs * beta.powi(3)).min(cap)),
             };
-            let per_ref = if matches!(kind, GridKind::Ug { .. } | GridKind::Org { .. }) { 12.0 } else { 20.0 };
+            let mut per_ref = if matches!(kind, GridKind::Ug { .. } | GridKind::Org { .. }) { 12.0 } else { 20.0 };
+            // `layout=blocks` copies each cell's triangles into 160-byte blocks of four, ⌈n/4⌉ a
+            // cell: 54 bytes per reference on the dragon's ORG (cells of ~2.3 triangles), at most
+            // 160 (one triangle a cell); 64 here.
+            if input.params.get(&format!("{structure}.layout"), String::new()).is_ok_and(|l| l == "blocks") {
+                per_ref += 64.0;
+            }
             48.0 * n + 8.0 * (cells + sub_cells) + per_ref * (refs + sub_refs)
         }
         voxel => {

@@ -460,9 +460,12 @@ impl Preset {
             // ORG's cell lists tested four triangles at a time and one at a time (`scalar`); the
             // wide BVH's SIMD path beside its scalar form (issue 30: each family's SIMD/scalar
             // speed-up), and Embree in its watertight mode, the like-for-like reference.
+            // ORG's cells copied into blocks (`blocks`), the layout of the wide BVH's leaves: what
+            // reading triangles through references costs it, against what the copies cost in memory.
             (Preset::OrgFast, "org") => vec![
                 (Vec::new(), None),
                 (vec!["simd=scalar".into()], Some("scalar".into())),
+                (vec!["org.layout=blocks".into()], Some("blocks".into())),
                 (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into())),
             ],
             (Preset::OrgFast, "bvh4") => vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))],

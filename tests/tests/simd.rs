@@ -2,7 +2,8 @@
 //! scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
 //! and its SIMD path bit for bit its scalar form (hits, normals and every counter) on every
 //! instruction set this machine has, forced one after another; and every grid's cell lists tested
-//! and the triangle octree's leaves tested four triangles at a time bit for bit as one at a time.
+//! and the triangle octree's leaves tested four triangles at a time bit for bit as one at a time,
+//! the grids' cells copied into blocks (`layout=blocks`) bit for bit as their reference lists.
 
 use kernels::cpu::brute_force;
 use kernels::{Counters, Hit, Traverse};
@@ -92,39 +93,42 @@ fn simd_sets<L: Lanes>() -> Vec<Isa> {
     L::SUPPORTED.iter().copied().filter(|&i| i != Isa::Scalar && i.available()).collect()
 }
 
-/// The SIMD paths against the scalar one on `rays`: hit, normal and counters per ray, bit for bit.
-fn assert_simd_is_scalar<L: Lanes>(accel: &mut L, rays: &[Ray], what: &str) {
-    let trace = |accel: &L| -> Vec<Traced> {
-        rays.par_iter()
-            .map(|ray| {
-                let mut c = Counters::default();
-                let hit = accel.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
-                assert_eq!(
-                    key(hit),
-                    key(accel.intersect(ray, 0.0, f32::INFINITY)),
-                    "{what}: counted and timed paths agree"
-                );
-                (hit.map(|h| (h.t.to_bits(), h.prim, h.normal.to_array().map(f32::to_bits))), c)
-            })
-            .collect()
-    };
+/// Each ray's hit (`t`, prim and normal as bits) and counters, on the instruction set `accel`
+/// is set to; the counted and the timed paths must agree.
+fn traced<L: Lanes>(accel: &L, rays: &[Ray], what: &str) -> Vec<Traced> {
+    rays.par_iter()
+        .map(|ray| {
+            let mut c = Counters::default();
+            let hit = accel.intersect_counted(ray, 0.0, f32::INFINITY, &mut c);
+            assert_eq!(
+                key(hit),
+                key(accel.intersect(ray, 0.0, f32::INFINITY)),
+                "{what}: counted and timed paths agree"
+            );
+            (hit.map(|h| (h.t.to_bits(), h.prim, h.normal.to_array().map(f32::to_bits))), c)
+        })
+        .collect()
+}
+
+/// `got` is `want` ray for ray, bit for bit.
+fn assert_same(want: &[Traced], got: &[Traced], what: &str) {
+    let differ = want.iter().zip(got).filter(|(a, b)| a != b).count();
+    let first = want.iter().zip(got).position(|(a, b)| a != b);
+    assert_eq!(differ, 0, "{what}: differs on {differ} of {} rays; first {first:?}", want.len());
+}
+
+/// The SIMD paths against the scalar one on `rays`: hit, normal and counters per ray, bit for
+/// bit. Returns the scalar path's.
+fn assert_simd_is_scalar<L: Lanes>(accel: &mut L, rays: &[Ray], what: &str) -> Vec<Traced> {
     accel.set_isa(Isa::Scalar);
-    let scalar = trace(accel);
+    let scalar = traced(accel, rays, what);
     let sets = simd_sets::<L>();
     assert!(!sets.is_empty() || !Isa::Sse4.available(), "{what}: this CPU has SSE4.1 but no SIMD path was tried");
     for isa in sets {
         accel.set_isa(isa);
-        let simd = trace(accel);
-        let differ = scalar.iter().zip(&simd).filter(|(a, b)| a != b).count();
-        let first = scalar.iter().zip(&simd).position(|(a, b)| a != b);
-        assert_eq!(
-            differ,
-            0,
-            "{what}: {} differs from scalar on {differ} of {} rays; first {first:?}",
-            isa.name(),
-            rays.len()
-        );
+        assert_same(&scalar, &traced(accel, rays, what), &format!("{what}: {} against scalar", isa.name()));
     }
+    scalar
 }
 
 /// The shared ray set of a scene and its camera's rays at 160².
@@ -160,12 +164,20 @@ mod grids {
         let triangles = scene.triangles();
         let (rays, primary) = scene_rays(&scene, &triangles, name);
         for kind in ["ug", "rg", "rg2", "org"] {
-            let params = Params::default();
-            let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
-            let mut grid = structures::grid::build(&input, GridKind::from_params(kind, &params).expect("defaults"))
-                .unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
-            assert_simd_is_scalar(&mut grid, &rays, &format!("{name} {kind}"));
-            assert_simd_is_scalar(&mut grid, &primary, &format!("{name} {kind} primary"));
+            let grid = |params: &Params| {
+                let input = BuildInput { scene: &scene, triangles: triangles.clone(), params };
+                structures::grid::build(&input, GridKind::from_params(kind, params).expect("defaults"))
+                    .unwrap_or_else(|e| panic!("{name} {kind}: {e}"))
+            };
+            let mut refs = grid(&Params::default());
+            let mut blocks = grid(&Params::parse([format!("{kind}.layout=blocks").as_str()]).expect("parses"));
+            blocks.validate().unwrap_or_else(|e| panic!("{name} {kind} blocks: {e}"));
+            for (rays, what) in [(&rays, format!("{name} {kind}")), (&primary, format!("{name} {kind} primary"))] {
+                let oracle = assert_simd_is_scalar(&mut refs, rays, &what);
+                // The copied blocks, scalar and SIMD, against the references' scalar loop.
+                let copied = assert_simd_is_scalar(&mut blocks, rays, &format!("{what} layout=blocks"));
+                assert_same(&oracle, &copied, &format!("{what}: layout=blocks against layout=refs"));
+            }
         }
         for mailbox in ["on", "off"] {
             let params = Params::parse([format!("octree.mailbox={mailbox}").as_str()]).expect("parses");
@@ -179,12 +191,11 @@ mod grids {
     tests::per_builtin_scene!(check_grids);
 }
 
-/// A stack of 300 coplanar triangles overlapping around one point, in shuffled sizes and turns:
-/// rays through the overlap hit many of them at equal `t` (the plane z = 1 is exact in f32 and
-/// axis-parallel rays make every triangle's `t` the same float), and whichever leaf the traversal
-/// opens first, the lowest index must win, as in brute force.
-/// 300 coplanar triangles overlapping around one point, and 4,000 rays through the overlap (half
-/// axis-parallel, half nearly so), more than half of which meet several triangles at equal `t`.
+/// A stack of 300 coplanar triangles overlapping around one point, in shuffled sizes and turns,
+/// and 4,000 rays through the overlap (half axis-parallel, half nearly so), more than half of
+/// which meet several triangles at equal `t` (the plane z = 1 is exact in f32, and axis-parallel
+/// rays make every triangle's `t` the same float): whichever leaf or cell the traversal opens
+/// first, the lowest index must win, as in brute force.
 fn coplanar_stack() -> (Scene, Vec<Ray>) {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(30);
@@ -226,6 +237,9 @@ fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
         ("rg2", &[]),
         ("org", &[]),
         ("org", &["simd=scalar"]),
+        ("org", &["org.layout=blocks"]),
+        ("org", &["org.layout=blocks", "simd=scalar"]),
+        ("ug", &["ug.layout=blocks"]),
         ("octree", &[]),
         ("octree", &["simd=scalar"]),
         ("octree", &["octree.mailbox=off"]),

@@ -42,7 +42,7 @@
 //! (`simd=scalar`, the oracle): the same hits either way.
 
 use scenes::{Camera, Ray};
-use structures::grid::{BRICK_SHIFT, Grid, GridHeader, SUBGRID_BIT};
+use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, SUBGRID_BIT};
 
 use super::slab;
 use super::stack::Stack;
@@ -107,10 +107,21 @@ struct Level {
 }
 
 impl Level {
-    /// End of the current unit's span.
+    /// The axis whose boundary the ray crosses first, and where: the end of the current unit's
+    /// span. Ties go to the lowest axis (the other follows with an empty span). For a traceable
+    /// ray (`crate::ray_is_traceable`) no `t_next` is NaN, so this `t` is the minimum of the three
+    /// (`min` in the WGSL twin).
     #[inline(always)]
-    fn t_out(&self) -> f32 {
-        self.t_next[0].min(self.t_next[1]).min(self.t_next[2])
+    fn crossing(&self) -> (usize, f32) {
+        let [t0, t1, t2] = self.t_next;
+        let a = if t0 <= t1 && t0 <= t2 {
+            0
+        } else if t1 <= t2 {
+            1
+        } else {
+            2
+        };
+        (a, self.t_next[a])
     }
 }
 
@@ -211,20 +222,10 @@ impl DdaRay {
         self.level(h, bricks.header, 0, cell, lo, span, h.res, bricks.t_in)
     }
 
-    /// ADVANCE: steps `lv` into the next unit; `false` once the ray leaves the DDA's range (or no
-    /// boundary lies ahead on any axis).
+    /// ADVANCE: steps `lv` across its boundary on axis `a` at `t` ([`Level::crossing`]) into the
+    /// next unit; `false` once the ray leaves the DDA's range (or no boundary lies ahead).
     #[inline(always)]
-    fn advance(&self, h: &GridHeader, lv: &mut Level) -> bool {
-        // The axis crossed first; ties go to the lowest axis (the other follows with an empty span).
-        let [t0, t1, t2] = lv.t_next;
-        let a = if t0 <= t1 && t0 <= t2 {
-            0
-        } else if t1 <= t2 {
-            1
-        } else {
-            2
-        };
-        let t = lv.t_next[a];
+    fn advance(&self, h: &GridHeader, lv: &mut Level, (a, t): (usize, f32)) -> bool {
         // No boundary ahead (an axis that never steps), or NaN from a degenerate input: leave,
         // so no input can make this loop spin.
         if !t.is_finite() {
@@ -268,6 +269,9 @@ fn walk<T: TriangleLanes, S: Stats>(
     t_max: f32,
     stats: &mut S,
 ) -> Option<Hit> {
+    if !crate::ray_is_traceable(ray, t_min, t_max) {
+        return None;
+    }
     let top = grid.headers.first()?;
     let dda = DdaRay::new(ray);
     let t_enter = dda.clip(top, t_min, t_max)?;
@@ -315,17 +319,25 @@ fn walk<T: TriangleLanes, S: Stats>(
                     stats.prim_test();
                 }
             }
-            if tris.nearest(&grid.triangles, refs, t_min, &mut best_t, &mut best_prim) {
+            let found = match grid.layout {
+                CellLayout::Refs => tris.nearest(&grid.triangles, refs, t_min, &mut best_t, &mut best_prim),
+                CellLayout::Blocks => {
+                    let blocks = &grid.blocks[grid.cell_blocks[cell] as usize..grid.cell_blocks[cell + 1] as usize];
+                    triangle4::nearest_in_blocks(tris, blocks, t_min, &mut best_t, &mut best_prim)
+                }
+            };
+            if found {
                 cull_t = cull_bound(best_t);
             }
         }
         loop {
             // Early exit: the best hit lies in the cells visited so far (see `HIT_MARGIN`).
-            if cull_t < cur.t_out() {
+            let crossing = cur.crossing();
+            if cull_t < crossing.1 {
                 break 'traverse;
             }
             // ADVANCE within this DDA, or POP to the one it was entered from once it is done.
-            if dda.advance(h, &mut cur) {
+            if dda.advance(h, &mut cur, crossing) {
                 continue 'traverse;
             }
             let Some(below) = stack.pop() else { break 'traverse };

@@ -71,6 +71,33 @@ pub(crate) trait TriangleLanes {
     }
 }
 
+/// The nearest triangle of `blocks` (copied lists, in list order) hit within `(t_min, best_t)`,
+/// as [`TriangleLanes::nearest`] finds it in the list they were copied from: each block against
+/// the best hit so far, its lanes taken in order with a strict `<` (the first of equal `t` wins).
+#[inline(always)]
+pub(crate) fn nearest_in_blocks<T: TriangleLanes>(
+    tris: &T,
+    blocks: &[Tri4],
+    t_min: f32,
+    best_t: &mut f32,
+    best_prim: &mut u32,
+) -> bool {
+    let mut found = false;
+    for block in blocks {
+        let (mut mask, t) = tris.block(block, t_min, *best_t);
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if t[lane] < *best_t {
+                *best_t = t[lane];
+                *best_prim = block.prim[lane];
+                found = true;
+            }
+        }
+    }
+    found
+}
+
 /// The shared scalar test, one lane at a time.
 pub(crate) struct Scalar(pub ShearedRay);
 

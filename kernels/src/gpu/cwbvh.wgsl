@@ -161,15 +161,9 @@ fn intersect_children(i: u32, r: CwbvhRay, t_max: f32) -> u32 {
     return hit_mask;
 }
 
-// A ray with a defined answer (kernels::ray_is_traceable; the prelude has already dropped the
-// rays with t_min < t_max false, NaN bounds among them): finite origin and direction, not zero.
-fn cwbvh_traceable(ray: Ray) -> bool {
-    let finite = all(abs(ray.origin) <= vec3<f32>(F32_MAX)) && all(abs(ray.dir) <= vec3<f32>(F32_MAX));
-    return finite && any(ray.dir != vec3<f32>(0.0)) && ray.t_min <= ray.t_max;
-}
 
 fn trace(ray: Ray, index: u32) -> TraceResult {
-    if (!cwbvh_traceable(ray)) {
+    if (!ray_traceable(ray)) {
         return no_hit();
     }
     let inv = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));

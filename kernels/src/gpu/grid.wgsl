@@ -203,6 +203,11 @@ fn cull_bound(t: f32) -> f32 {
 }
 
 fn trace(ray: Ray, index: u32) -> TraceResult {
+    // A ray without a defined answer ends as a miss, as on the CPU (whose DDA relies on it: no
+    // `t_next` is NaN, so the crossing it picks is the minimum `t_out` below takes).
+    if (!ray_traceable(ray)) {
+        return no_hit();
+    }
     let r = dda_ray(ray);
     let top = grid_header(0u);
     let clip = slab_span(r.origin, r.inv, top.lo, top.hi, ray.t_min, ray.t_max);

@@ -97,6 +97,13 @@ fn f32_inf() -> f32 {
     return bitcast<f32>(MISS_T_BITS | (frame.ray_count & 0u));
 }
 
+// A ray with a defined answer (kernels::ray_is_traceable; `main` has already dropped the rays
+// with t_min < t_max false, NaN bounds among them): finite origin and direction, not zero.
+fn ray_traceable(ray: Ray) -> bool {
+    let finite = all(abs(ray.origin) <= vec3<f32>(F32_MAX)) && all(abs(ray.dir) <= vec3<f32>(F32_MAX));
+    return finite && any(ray.dir != vec3<f32>(0.0)) && ray.t_min <= ray.t_max;
+}
+
 fn no_hit() -> TraceResult {
     return TraceResult(false, 0.0, NO_PRIM, NO_PRIM);
 }

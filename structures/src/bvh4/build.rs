@@ -6,8 +6,6 @@
 //! surface area until it has four (the greedy collapse of Wald, Benthin & Boulos 2008 and of
 //! Embree's `BVHNBuilder`); a BVH2 leaf becomes a wide leaf of ⌈count / 4⌉ blocks.
 
-use scenes::Triangle;
-
 use super::Bvh4;
 use super::layout::{Bvh4Node, MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, leaf};
 use crate::bvh::{Bvh, BvhNode};
@@ -107,22 +105,7 @@ fn leaf_word(binary: &Bvh, n: &BvhNode, blocks: &mut Vec<Tri4>) -> Result<u32, B
     }
     let first = blocks.len() as u32;
     for chunk in refs.chunks(WIDTH) {
-        blocks.push(block(chunk, &binary.triangles));
+        blocks.push(Tri4::gather(chunk, &binary.triangles));
     }
     Ok(leaf(first, count as u32))
-}
-
-/// One block of up to four triangles; the lanes after them stay empty.
-pub fn block(prims: &[u32], triangles: &[Triangle]) -> Tri4 {
-    let mut b = Tri4::EMPTY_BLOCK;
-    for (lane, &p) in prims.iter().enumerate() {
-        let tri = &triangles[p as usize];
-        for (k, corner) in tri.iter().enumerate() {
-            for (a, &x) in corner.to_array().iter().enumerate() {
-                b.v[k][a][lane] = x;
-            }
-        }
-        b.prim[lane] = p;
-    }
-    b
 }

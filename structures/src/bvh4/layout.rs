@@ -89,6 +89,22 @@ impl Tri4 {
     /// A block with no triangle in any lane.
     pub const EMPTY_BLOCK: Tri4 = Tri4 { v: [[[f32::NAN; WIDTH]; 3]; 3], prim: [NO_PRIM; WIDTH] };
 
+    /// Triangles `prims` (at most [`WIDTH`]) of the soup copied into one block, in order; the
+    /// lanes after them stay empty.
+    pub fn gather(prims: &[u32], triangles: &[scenes::Triangle]) -> Tri4 {
+        debug_assert!(prims.len() <= WIDTH);
+        let mut b = Tri4::EMPTY_BLOCK;
+        for (lane, &p) in prims.iter().enumerate() {
+            for (k, corner) in triangles[p as usize].iter().enumerate() {
+                for (a, &x) in corner.to_array().iter().enumerate() {
+                    b.v[k][a][lane] = x;
+                }
+            }
+            b.prim[lane] = p;
+        }
+        b
+    }
+
     /// The triangle of `lane`, as the soup stores it.
     #[inline(always)]
     pub fn triangle(&self, lane: usize) -> scenes::Triangle {

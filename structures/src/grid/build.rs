@@ -10,7 +10,7 @@ use scenes::{Aabb, Triangle};
 use super::layout::{GridHeader, SUBGRID_BIT};
 use super::level::{Footprint, LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
-use super::{BetaRule, CellTest, GammaTest, Grid, GridKind, LevelStats};
+use super::{BetaRule, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats};
 use crate::simd::SimdChoice;
 use crate::{BuildError, BuildInput};
 
@@ -158,6 +158,11 @@ fn top_resolution(kind: GridKind, all: &[u32], bboxes: &[Aabb], bounds: &Aabb) -
 
 pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     let isa = SimdChoice::from_params(input.params)?.resolve(&super::SUPPORTED)?;
+    let layout = input.params.choice(
+        &format!("{}.layout", kind.name()),
+        CellLayout::Refs,
+        &[("refs", CellLayout::Refs), ("blocks", CellLayout::Blocks)],
+    )?;
     let tris = &input.triangles;
     if tris.len() >= SUBGRID_BIT as usize {
         return Err(BuildError::Limit {
@@ -224,6 +229,9 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     grid.isa = isa;
     grid.levels = levels;
     grid.budget_stop = budget_stop;
+    if layout == CellLayout::Blocks {
+        grid.copy_into_blocks()?;
+    }
     Ok(grid)
 }
 

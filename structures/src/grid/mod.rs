@@ -26,6 +26,7 @@ use std::sync::Arc;
 use scenes::Triangle;
 use serde::Serialize;
 
+use crate::bvh4::layout::{Tri4, WIDTH};
 use crate::simd::{Isa, Resolved};
 use crate::{MemoryReport, Structure};
 pub use build::{MAX_DEPTH, MAX_REFS, build};
@@ -137,6 +138,23 @@ impl GridKind {
     }
 }
 
+/// The most triangle blocks a grid may hold ([`CellLayout::Blocks`]): 2^24, 2.5 GiB.
+pub const MAX_BLOCKS: u64 = 1 << 24;
+
+/// How the CPU kernel reads a cell's triangles (`<kind>.layout`; every kind the same).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CellLayout {
+    /// Through the cell's references into the scene's triangle soup, four gathered at a time
+    /// (seed 002's pointers, 4 bytes each; the default).
+    Refs,
+    /// From copies of the cell's triangles, four to a 160-byte block with the corners side by
+    /// side ([`Tri4`], the wide BVH's leaf blocks), in reference order: no indirection and no
+    /// gathering per test, for about 40 bytes per reference (a cell of n triangles holds ⌈n/4⌉
+    /// blocks) on top of the references, which the sub-grid links and the WGSL kernel still read.
+    Blocks,
+}
+
 /// What one level of the hierarchy holds, for the report (seed 002 §2's per-level accounting).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct LevelStats {
@@ -171,6 +189,14 @@ pub struct Grid {
     /// The instruction set the kernel tests triangles with (`simd`, resolved against this CPU;
     /// scalar until the build resolves it).
     pub isa: Resolved,
+    /// How the CPU kernel reads a cell's triangles.
+    pub layout: CellLayout,
+    /// [`CellLayout::Blocks`]: every cell's triangles in blocks, cell after cell; empty otherwise.
+    pub blocks: Vec<Tri4>,
+    /// [`CellLayout::Blocks`]: parallel to `cells`, the first block of each cell, so cell `c` of a
+    /// grid holds `blocks[cell_blocks[first + c]..cell_blocks[first + c + 1]]` (none for a
+    /// sub-grid link); empty otherwise.
+    pub cell_blocks: Vec<u32>,
 }
 
 /// The instruction sets the grid kernel's triangle tests are written for (four lanes over each
@@ -202,7 +228,46 @@ impl Grid {
             levels: Vec::new(),
             budget_stop: None,
             isa: Resolved::SCALAR,
+            layout: CellLayout::Refs,
+            blocks: Vec::new(),
+            cell_blocks: Vec::new(),
         }
+    }
+
+    /// Stores every cell's triangles as blocks too ([`CellLayout::Blocks`]); refused past
+    /// [`MAX_BLOCKS`].
+    pub fn copy_into_blocks(&mut self) -> Result<(), crate::BuildError> {
+        let count = |h: &GridHeader| {
+            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.cell_count()) as usize];
+            offsets.windows(2).map(|w| (w[1] - w[0]).div_ceil(WIDTH as u32) as u64).sum::<u64>()
+        };
+        let wanted: u64 = self.headers.iter().map(count).sum();
+        if wanted > MAX_BLOCKS {
+            return Err(crate::BuildError::Limit {
+                structure: self.kind.name(),
+                detail: format!(
+                    "{wanted} triangle blocks ({} MiB); layout=blocks holds at most {MAX_BLOCKS}",
+                    (wanted * size_of::<Tri4>() as u64) >> 20
+                ),
+            });
+        }
+        let mut blocks = Vec::with_capacity(wanted as usize);
+        let mut cell_blocks = Vec::with_capacity(self.cells.len());
+        for h in &self.headers {
+            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.cell_count()) as usize];
+            for w in offsets.windows(2) {
+                cell_blocks.push(blocks.len() as u32);
+                let refs = &self.refs[w[0] as usize..w[1] as usize];
+                if !matches!(refs, [link] if link & SUBGRID_BIT != 0) {
+                    blocks.extend(refs.chunks(WIDTH).map(|quad| Tri4::gather(quad, &self.triangles)));
+                }
+            }
+            cell_blocks.push(blocks.len() as u32);
+        }
+        self.layout = CellLayout::Blocks;
+        self.blocks = blocks;
+        self.cell_blocks = cell_blocks;
+        Ok(())
     }
 
     /// N_c: cells over all levels.
@@ -223,12 +288,18 @@ impl Structure for Grid {
 
     fn memory(&self) -> MemoryReport {
         let links = self.headers.len().saturating_sub(1) as u64;
-        MemoryReport::new(self.cell_count(), self.triangle_ref_count())
+        let report = MemoryReport::new(self.cell_count(), self.triangle_ref_count())
             .with("cells", (self.cells.len() * size_of::<u32>()) as u64)
             .with("references", self.triangle_ref_count() * size_of::<u32>() as u64)
             .with("sub-grid links", links * size_of::<u32>() as u64)
             .with("sub-grid headers", (self.headers.len() * size_of::<GridHeader>()) as u64)
-            .with("brick occupancy", (self.bricks.len() * size_of::<u32>()) as u64)
+            .with("brick occupancy", (self.bricks.len() * size_of::<u32>()) as u64);
+        match self.layout {
+            CellLayout::Refs => report,
+            CellLayout::Blocks => report
+                .with("triangle blocks", (self.blocks.len() * size_of::<Tri4>()) as u64)
+                .with("block offsets", (self.cell_blocks.len() * size_of::<u32>()) as u64),
+        }
     }
 
     fn params(&self) -> serde_json::Value {
@@ -241,6 +312,7 @@ impl Structure for Grid {
             "levels": self.levels,
             "budget_stop": self.budget_stop,
             "simd": self.isa.name(),
+            "layout": self.layout,
         })
     }
 }

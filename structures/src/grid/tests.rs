@@ -289,3 +289,42 @@ fn builds_are_deterministic() {
     let b = build(&input, kind).expect("builds");
     assert!(a.headers == b.headers && a.cells == b.cells && a.refs == b.refs);
 }
+
+/// `layout=blocks` copies each cell's triangles four to a block in reference order, none for a
+/// link, and `validate` catches a block that no longer matches its cell.
+#[test]
+fn blocks_copy_every_cell_and_validate_catches_a_changed_one() {
+    let scene = scenes::load_scene("stadium").expect("loads");
+    let params = Params::parse(["org.layout=blocks"]).expect("parses");
+    let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+    let mut g = build(&input, GridKind::ORG_PAPER).expect("builds");
+    assert_eq!(g.layout, super::CellLayout::Blocks);
+    g.validate().expect("valid blocks");
+    assert!(g.headers.len() > 1, "the stadium's ORG has sub-grids, so links are exercised");
+    let leaf_refs: usize = leaf_cells(&g).iter().map(|(_, refs)| refs.len().div_ceil(4)).sum();
+    assert_eq!(g.blocks.len(), leaf_refs, "⌈n/4⌉ blocks per leaf cell, none per link");
+    let memory = crate::Structure::memory(&g);
+    let bytes = |name: &str| memory.components.iter().find(|(c, _)| c == name).map(|&(_, b)| b);
+    assert_eq!(bytes("triangle blocks"), Some(160 * g.blocks.len() as u64));
+
+    let middle = g.blocks.len() / 2;
+    let lane = g.blocks[middle].prim.iter().position(|&p| p != u32::MAX).expect("a full lane");
+    g.blocks[middle].v[1][2][lane] += 1.0;
+    let err = g.validate().expect_err("a moved corner");
+    assert!(err.contains("differs from its triangles"), "{err}");
+
+    let (_, mut refs_only) = grid("teapot", GridKind::ORG_PAPER);
+    refs_only.validate().expect("valid");
+    assert_eq!(refs_only.layout, super::CellLayout::Refs);
+    refs_only.blocks.push(crate::bvh4::layout::Tri4::EMPTY_BLOCK);
+    assert!(refs_only.validate().is_err(), "blocks beside layout=refs");
+}
+
+#[test]
+fn a_bad_layout_is_rejected_by_name() {
+    let scene = scenes::load_scene("teapot").expect("loads");
+    let params = Params::parse(["ug.layout=soa"]).expect("parses");
+    let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+    let err = build(&input, GridKind::Ug { lambda: 5.0 }).err().expect("an unknown layout").to_string();
+    assert!(err.contains("ug.layout") && err.contains("blocks"), "{err}");
+}

@@ -1,14 +1,16 @@
 //! Structural checks of a built grid, for the builder's debug assertions and the tests.
 
-use super::Grid;
 use super::layout::{SUBGRID_BIT, occupancy};
+use super::{CellLayout, Grid};
+use crate::bvh4::layout::{Tri4, WIDTH};
 
 impl Grid {
     /// Checks the layout's invariants: each grid's offsets are a prefix sum inside `refs`; every
     /// reference is a triangle or a sub-grid link alone in its cell; every sub-grid is linked
     /// exactly once, one level below its parent, over exactly its parent cell's box; every brick's
     /// occupancy bit is set exactly when one of its cells is non-empty; and every triangle is
-    /// listed somewhere.
+    /// listed somewhere; with [`CellLayout::Blocks`], every cell's blocks are exactly its
+    /// triangles copied four at a time in reference order, and a link's cell has none.
     #[allow(clippy::needless_range_loop)] // `a` indexes four arrays at once
     pub fn validate(&self) -> Result<(), String> {
         let mut linked = vec![0u32; self.headers.len()];
@@ -29,6 +31,7 @@ impl Grid {
             }
             for c in 0..m {
                 let refs = &self.refs[offsets[c] as usize..offsets[c + 1] as usize];
+                self.check_blocks(first + c, refs).map_err(|e| format!("grid {g} cell {c}: {e}"))?;
                 for &r in refs {
                     if r & SUBGRID_BIT == 0 {
                         *listed.get_mut(r as usize).ok_or(format!("grid {g} cell {c}: triangle {r} out of range"))? =
@@ -62,5 +65,33 @@ impl Grid {
             Some(t) => Err(format!("triangle {t} is in no cell")),
             None => Ok(()),
         }
+    }
+
+    /// The blocks of the cell whose offsets start at `cells[at]`, against its references `refs`.
+    fn check_blocks(&self, at: usize, refs: &[u32]) -> Result<(), String> {
+        match self.layout {
+            CellLayout::Refs if self.blocks.is_empty() && self.cell_blocks.is_empty() => return Ok(()),
+            CellLayout::Refs => return Err("blocks stored for layout=refs".into()),
+            CellLayout::Blocks if self.cell_blocks.len() != self.cells.len() => {
+                return Err(format!("{} block offsets for {} cell offsets", self.cell_blocks.len(), self.cells.len()));
+            }
+            CellLayout::Blocks => {}
+        }
+        let (from, to) = (self.cell_blocks[at] as usize, self.cell_blocks[at + 1] as usize);
+        let blocks = self.blocks.get(from..to).ok_or(format!("blocks {from}..{to} out of range"))?;
+        let triangles: &[u32] = match refs {
+            [link] if link & SUBGRID_BIT != 0 => &[],
+            _ => refs,
+        };
+        let chunks = triangles.chunks(WIDTH);
+        if chunks.len() != blocks.len() {
+            return Err(format!("{} blocks for {} triangles", blocks.len(), triangles.len()));
+        }
+        for (block, quad) in blocks.iter().zip(chunks) {
+            if bytemuck::bytes_of(block) != bytemuck::bytes_of(&Tri4::gather(quad, &self.triangles)) {
+                return Err(format!("a block differs from its triangles {quad:?}"));
+            }
+        }
+        Ok(())
     }
 }
