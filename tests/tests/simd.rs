@@ -2,7 +2,7 @@
 //! scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
 //! and its SIMD path bit for bit its scalar form (hits, normals and every counter) on every
 //! instruction set this machine has, forced one after another; and every grid's cell lists tested
-//! and the triangle octree's leaves tested four triangles at a time bit for bit as one at a time,
+//! and the kd-tree's and triangle octree's leaves tested four triangles at a time bit for bit as one at a time,
 //! the grids' cells copied into blocks (`layout=blocks`) bit for bit as their reference lists.
 
 use kernels::cpu::brute_force;
@@ -12,6 +12,7 @@ use scenes::{Camera, Ray, Scene, Triangle};
 use structures::bvh4::Bvh4;
 use structures::bvh4::layout::{EMPTY, NO_PRIM, leaf_blocks};
 use structures::grid::{Grid, GridKind};
+use structures::kdtree::KdTree;
 use structures::octree::TriOctree;
 use structures::simd::{Isa, Resolved};
 use structures::{BuildInput, Params};
@@ -78,6 +79,13 @@ impl Lanes for Grid {
     const SUPPORTED: &'static [Isa] = &structures::grid::SUPPORTED;
     fn set_isa(&mut self, isa: Isa) {
         self.isa = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
+    }
+}
+
+impl Lanes for KdTree {
+    const SUPPORTED: &'static [Isa] = &structures::simd::FOUR_LANES;
+    fn set_isa(&mut self, isa: Isa) {
+        self.params.simd = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
     }
 }
 
@@ -153,7 +161,7 @@ fn check_scene(name: &str) {
 
 tests::per_builtin_scene!(check_scene);
 
-/// Every grid kind's cell lists and the triangle octree's leaves, tested four triangles at a time,
+/// Every grid kind's cell lists, the kd-tree's and the triangle octree's leaves, tested four triangles at a time,
 /// give their scalar loops' hits and counters bit for bit (their exactness against brute force is
 /// `tests/grids.rs`' and `tests/octree.rs`').
 mod grids {
@@ -178,6 +186,13 @@ mod grids {
                 let copied = assert_simd_is_scalar(&mut blocks, rays, &format!("{what} layout=blocks"));
                 assert_same(&oracle, &copied, &format!("{what}: layout=blocks against layout=refs"));
             }
+        }
+        for traversal in ["stack", "restart"] {
+            let params = Params::parse([format!("kdtree.traversal={traversal}").as_str()]).expect("parses");
+            let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
+            let mut kd = KdTree::build(&input).unwrap_or_else(|e| panic!("{name} kdtree: {e}"));
+            assert_simd_is_scalar(&mut kd, &rays, &format!("{name} kdtree traversal={traversal}"));
+            assert_simd_is_scalar(&mut kd, &primary, &format!("{name} kdtree traversal={traversal} primary"));
         }
         for mailbox in ["on", "off"] {
             let params = Params::parse([format!("octree.mailbox={mailbox}").as_str()]).expect("parses");
@@ -244,7 +259,9 @@ fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
         ("octree", &["simd=scalar"]),
         ("octree", &["octree.mailbox=off"]),
         ("kdtree", &[]),
+        ("kdtree", &["simd=scalar"]),
         ("kdtree", &["kdtree.traversal=restart"]),
+        ("kdtree", &["kdtree.traversal=restart", "simd=scalar"]),
     ];
     let wrong: Vec<String> = cases
         .iter()

@@ -18,12 +18,18 @@
 //! path gives, and are handed to the stack walk: a ray lying in a split plane, and a ray crossing a
 //! plane within the margin of the start of its interval (a cell between two nearly simultaneous
 //! crossings, a sliver the rounded intervals can lose, where an edge or a vertex may be hit).
+//!
+//! A leaf's triangles are tested four at a time in SSE lanes where the CPU has them
+//! (`simd=auto|sse4`; `cpu::triangle4`, bit for bit the scalar test per lane, the first of
+//! equally near triangles winning as in the scalar loop), or one at a time (`simd=scalar`).
 
 use scenes::{Camera, Ray};
 use structures::kdtree::{KdNode, KdTraversal, KdTree, MAX_DEPTH};
 
 use super::slab;
-use super::triangle::{ShearedRay, nearest_hit};
+use super::stack::Stack;
+use super::triangle::nearest_hit;
+use super::triangle4::{self, LaneWalk, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -49,36 +55,42 @@ fn crossing(n: &KdNode, origin: &[f32; 3], dir: &[f32; 3]) -> Crossing {
     Crossing { axis, o, split, near, far }
 }
 
-/// Tests a leaf's triangles, keeping the nearest hit (`t`, triangle) in `best`.
+/// Tests a leaf's triangles with `tris` (four at a time, or one at a time for `simd=scalar`),
+/// keeping the nearest hit (`t`, triangle) in `best`: the first of equally near ones in the list.
 #[inline(always)]
-fn test_leaf<S: Stats>(
+fn test_leaf<T: TriangleLanes, S: Stats>(
     tree: &KdTree,
     leaf: &KdNode,
-    ray: &ShearedRay,
+    tris: &T,
     t_min: f32,
-    best: (&mut f32, &mut u32),
+    (best_t, best_prim): (&mut f32, &mut u32),
     stats: &mut S,
 ) {
-    let (best_t, best_prim) = best;
-    for &r in &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()] {
-        stats.prim_test();
-        if let Some(t) = ray.intersect(&tree.triangles[r as usize], t_min, *best_t) {
-            *best_t = t;
-            *best_prim = r;
+    let refs = &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()];
+    if S::COUNTING {
+        for _ in refs {
+            stats.prim_test();
         }
     }
+    tris.nearest(&tree.triangles, refs, t_min, best_t, best_prim);
 }
 
-fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+#[inline(always)]
+fn trace<T: TriangleLanes, S: Stats>(
+    tree: &KdTree,
+    ray: &Ray,
+    tris: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
     let origin = ray.origin.to_array();
     let dir = ray.dir.to_array();
     let inv = slab::reciprocal(ray.dir);
     let (lo, hi) = (tree.bounds.0.to_array(), tree.bounds.1.to_array());
     let (mut t_near, mut t_far) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max)?;
-    let sheared = ShearedRay::new(ray);
     let (mut best_t, mut best_prim) = (t_max, u32::MAX);
-    let mut stack = [(0u32, 0f32, 0f32); MAX_DEPTH as usize + 1];
-    let mut sp = 0usize;
+    let mut stack = Stack::<(u32, f32, f32), { MAX_DEPTH as usize + 1 }>::new();
     let mut node = 0usize;
     'traverse: loop {
         // DESCEND to a leaf.
@@ -93,8 +105,7 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
             if dir[axis] == 0.0 {
                 // Parallel to the plane: the origin's side only, or both when in the plane.
                 if o == split {
-                    stack[sp] = (far as u32, t_near, t_far);
-                    sp += 1;
+                    stack.push((far as u32, t_near, t_far));
                     stats.push();
                 }
                 node = near;
@@ -106,30 +117,25 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
             } else if t_split < t_near * (1.0 - MARGIN) {
                 node = far; // the ray is past the plane already
             } else {
-                stack[sp] = (far as u32, t_split * (1.0 - MARGIN), t_far);
-                sp += 1;
+                stack.push((far as u32, t_split * (1.0 - MARGIN), t_far));
                 stats.push();
                 node = near;
                 t_far = t_split * (1.0 + MARGIN);
             }
         }
         // LEAF: its triangles, nearest hit kept.
-        test_leaf(tree, &tree.nodes[node], &sheared, t_min, (&mut best_t, &mut best_prim), stats);
+        test_leaf(tree, &tree.nodes[node], tris, t_min, (&mut best_t, &mut best_prim), stats);
         // POP the next far child the ray reaches before the best hit. (No early exit on a hit
         // inside this cell: a ray in a split plane pushed its far child with this very interval,
         // and a hit within the margin of the plane may yet be beaten across it.)
-        loop {
-            if sp == 0 {
-                break 'traverse;
-            }
-            sp -= 1;
+        while let Some((next, a, b)) = stack.pop() {
             stats.pop();
-            let (next, a, b) = stack[sp];
             if a <= best_t {
                 (node, t_near, t_far) = (next as usize, a, b);
                 continue 'traverse;
             }
         }
+        break 'traverse;
     }
     nearest_hit(&tree.triangles, best_t, best_prim)
 }
@@ -139,7 +145,15 @@ fn trace<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut
 pub(crate) const RESTART_TIE: f32 = 1.0 / 1_048_576.0;
 
 /// kd-restart (see the module doc); `None` when the ray must be handed to the stack walk.
-fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Option<Hit>> {
+#[inline(always)]
+fn trace_restart<T: TriangleLanes, S: Stats>(
+    tree: &KdTree,
+    ray: &Ray,
+    tris: &T,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Option<Hit>> {
     let origin = ray.origin.to_array();
     let dir = ray.dir.to_array();
     let inv = slab::reciprocal(ray.dir);
@@ -147,7 +161,6 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
     let Some((t_enter, t_exit)) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max) else {
         return Some(None);
     };
-    let sheared = ShearedRay::new(ray);
     let (mut best_t, mut best_prim) = (t_max, u32::MAX);
     let mut t_start = t_enter;
     // The node whose plane the interval starts at (none at the tree's entry).
@@ -188,7 +201,7 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
                 t_far = t_split;
             }
         }
-        test_leaf(tree, &tree.nodes[node], &sheared, t_min, (&mut best_t, &mut best_prim), stats);
+        test_leaf(tree, &tree.nodes[node], tris, t_min, (&mut best_t, &mut best_prim), stats);
         // A hit before this leaf's exit (by more than the margin) is the nearest: every later
         // leaf starts at or after the exit. Otherwise RESTART past the leaf.
         if best_t < t_far * (1.0 - MARGIN) || t_far >= t_exit {
@@ -200,14 +213,32 @@ fn trace_restart<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, sta
     Some(nearest_hit(&tree.triangles, best_t, best_prim))
 }
 
-fn trace_any<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    match tree.params.traversal {
-        KdTraversal::Stack => trace(tree, ray, t_min, t_max, stats),
-        KdTraversal::Restart => match trace_restart(tree, ray, t_min, t_max, stats) {
-            Some(hit) => hit,
-            None => trace(tree, ray, t_min, t_max, stats),
-        },
+/// The walk of one ray (`kdtree.traversal`), for [`triangle4::run_on`].
+struct KdWalk<'a, S> {
+    tree: &'a KdTree,
+    ray: &'a Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &'a mut S,
+}
+
+impl<S: Stats> LaneWalk for KdWalk<'_, S> {
+    #[inline(always)]
+    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
+        let KdWalk { tree, ray, t_min, t_max, stats } = self;
+        match tree.params.traversal {
+            KdTraversal::Stack => trace(tree, ray, tris, t_min, t_max, stats),
+            KdTraversal::Restart => match trace_restart(tree, ray, tris, t_min, t_max, stats) {
+                Some(hit) => hit,
+                None => trace(tree, ray, tris, t_min, t_max, stats),
+            },
+        }
     }
+}
+
+/// Runs the walk with the triangle tests of the instruction set the tree was resolved to.
+fn trace_any<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+    triangle4::run_on(tree.params.simd, ray, KdWalk { tree, ray, t_min, t_max, stats })
 }
 
 impl Traverse for KdTree {

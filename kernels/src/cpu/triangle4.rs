@@ -50,10 +50,21 @@ pub(crate) trait TriangleLanes {
     /// [`TriangleLanes::block`]'s.
     fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
 
+    /// The scalar test of one triangle: what every lane computes, without the lanes.
+    fn one(&self, tri: &Triangle, t_min: f32, t_max: f32) -> Option<f32>;
+
     /// The nearest of triangles `ids` of `tris` hit within `(t_min, best_t)`, in list order (the
-    /// first of equal `t` wins): updates `best_t` and `best_prim`, and says whether it did.
+    /// first of equal `t` wins): updates `best_t` and `best_prim`, and says whether it did. A list
+    /// of one triangle (many grid cells and kd-tree leaves) takes the scalar test, which is what
+    /// its lane would compute, without gathering four.
     #[inline(always)]
     fn nearest(&self, tris: &[Triangle], ids: &[u32], t_min: f32, best_t: &mut f32, best_prim: &mut u32) -> bool {
+        if let &[id] = ids {
+            let Some(t) = self.one(&tris[id as usize], t_min, *best_t) else { return false };
+            *best_t = t;
+            *best_prim = id;
+            return true;
+        }
         let mut found = false;
         for quad in ids.chunks(WIDTH) {
             let (mut mask, t) = self.listed(tris, quad, t_min, *best_t);
@@ -108,6 +119,11 @@ impl Scalar {
 }
 
 impl TriangleLanes for Scalar {
+    #[inline(always)]
+    fn one(&self, tri: &Triangle, t_min: f32, t_max: f32) -> Option<f32> {
+        self.0.intersect(tri, t_min, t_max)
+    }
+
     #[inline(always)]
     fn block(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
         lane_by_lane(WIDTH, |lane| self.0.intersect(&block.triangle(lane), t_min, t_max))
@@ -287,6 +303,11 @@ mod sse {
     }
 
     impl TriangleLanes for Sse {
+        #[inline(always)]
+        fn one(&self, tri: &Triangle, t_min: f32, t_max: f32) -> Option<f32> {
+            self.sheared.intersect(tri, t_min, t_max)
+        }
+
         #[inline(always)]
         fn block(&self, block: &Tri4, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
             let v = |k: usize, a: usize| F32x4::load(&block.v[k][a]);

@@ -9,7 +9,8 @@
 //! [`MAX_DEPTH`]); `leaf_size`, a node of at most this many triangles is a leaf (1: the SAH alone
 //! decides); `perfect_splits` (`on`); `traversal`, how the kernels walk the tree: `stack` (a stack
 //! of far children, the default) or `restart` (kd-restart, Foley & Sugerman 2005, seed 003: no
-//! stack; after each leaf the ray restarts from the root past that leaf).
+//! stack; after each leaf the ray restarts from the root past that leaf). `simd` (`auto`, `scalar`,
+//! `sse4`): a leaf's triangles tested four at a time, as the grids' cells are.
 
 mod build;
 pub mod clip;
@@ -21,6 +22,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use scenes::Triangle;
 
+use crate::simd::{Resolved, SimdChoice};
 use crate::{BuildError, BuildInput, MemoryReport, Params, Structure};
 pub use layout::KdNode;
 
@@ -38,6 +40,8 @@ pub struct KdParams {
     pub leaf_size: u32,
     pub perfect_splits: bool,
     pub traversal: KdTraversal,
+    /// The instruction set a leaf's triangles are tested with, four at a time (`simd`).
+    pub simd: Resolved,
 }
 
 /// How the kernels walk the tree (`kdtree.traversal`).
@@ -50,7 +54,7 @@ pub enum KdTraversal {
 }
 
 impl KdParams {
-    pub const KEYS: [&'static str; 7] = [
+    pub const KEYS: [&'static str; 8] = [
         "kdtree.ct",
         "kdtree.ci",
         "kdtree.empty_bonus",
@@ -58,6 +62,7 @@ impl KdParams {
         "kdtree.leaf_size",
         "kdtree.perfect_splits",
         "kdtree.traversal",
+        SimdChoice::KEY,
     ];
 
     pub fn from_params(params: &Params) -> Result<Self, BuildError> {
@@ -73,6 +78,7 @@ impl KdParams {
                 KdTraversal::Stack,
                 &[("stack", KdTraversal::Stack), ("restart", KdTraversal::Restart)],
             )?,
+            simd: SimdChoice::from_params(params)?.resolve(&crate::simd::FOUR_LANES)?,
         };
         let bad =
             |key: &str, detail: &str| Err(BuildError::BadParam { key: format!("kdtree.{key}"), detail: detail.into() });
@@ -223,6 +229,7 @@ impl Structure for KdTree {
             "leaf_size": p.leaf_size,
             "perfect_splits": if p.perfect_splits { "on" } else { "off" },
             "traversal": match p.traversal { KdTraversal::Stack => "stack", KdTraversal::Restart => "restart" },
+            "simd": p.simd.name(),
             "depth": self.depth,
             "sah_cost": self.sah_cost(),
         })
