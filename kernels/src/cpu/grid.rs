@@ -85,11 +85,15 @@ struct DdaRay {
     inv: [f32; 3],
     /// +1 / −1 along the direction, 0 for an axis that never steps (reciprocal not finite).
     step: [i32; 3],
+    /// 1 where `step` is +1: a unit is left through its upper face, unit `c + 1`'s lower one.
+    up: [u32; 3],
 }
 
 /// One DDA: over the bricks of a grid (`shift` = [`BRICK_SHIFT`]), or over the cells of one brick
 /// or of a whole one-brick grid (`shift` = 0). `cell` and the bounds count units of `1 << shift`
-/// cells; the DDA leaves once a step takes `cell[a]` out of `[lo[a], lo[a] + span[a])`. `index` is
+/// cells; the DDA covers units `[lo, lo + span)` and leaves once a step on axis `a` takes `cell[a]`
+/// to `end[a]`, the unit just past that range in the direction of travel (a step moves one unit,
+/// so it reaches `end` exactly; on an axis that never steps it is never compared). `index` is
 /// the linear index of `cell` among the grid's cells (or bricks), moved by `delta[a]` per step, so
 /// no step multiplies. `t_next[a]` is where the ray leaves the current unit on axis `a` (`+inf` on
 /// an axis that never steps).
@@ -98,8 +102,7 @@ struct Level {
     header: u32,
     shift: u32,
     cell: [u32; 3],
-    lo: [u32; 3],
-    span: [u32; 3],
+    end: [u32; 3],
     index: u32,
     delta: [u32; 3],
     t_in: f32,
@@ -135,7 +138,7 @@ impl DdaRay {
             i if i > 0.0 => 1,
             _ => -1,
         });
-        Self { origin: ray.origin.to_array(), dir, inv, step }
+        Self { origin: ray.origin.to_array(), dir, inv, step, up: step.map(|s| u32::from(s > 0)) }
     }
 
     /// The span `[t0, t1]` of the ray inside the box of `h`, within `(t_min, t_max)`: the robust
@@ -150,7 +153,7 @@ impl DdaRay {
     fn exit_t(&self, h: &GridHeader, a: usize, c: u32, shift: u32) -> f32 {
         match self.step[a] {
             0 => f32::INFINITY,
-            s => (h.boundary(a, (if s > 0 { c + 1 } else { c }) << shift) - self.origin[a]) * self.inv[a],
+            _ => (h.boundary(a, (c + self.up[a]) << shift) - self.origin[a]) * self.inv[a],
         }
     }
 
@@ -182,8 +185,10 @@ impl DdaRay {
         t_in: f32,
     ) -> Level {
         let stride = [1, units[0], units[0] * units[1]];
-        let mut lv = Level { header, shift, cell, lo, span, index: 0, delta: [0; 3], t_in, t_next: [0.0; 3] };
+        let mut lv = Level { header, shift, cell, end: [0; 3], index: 0, delta: [0; 3], t_in, t_next: [0.0; 3] };
         for a in 0..3 {
+            // Below `lo` wraps (`lo` = 0 gives u32::MAX), as the step itself does.
+            lv.end[a] = if self.step[a] > 0 { lo[a] + span[a] } else { lo[a].wrapping_sub(1) };
             lv.index += stride[a] * cell[a];
             lv.delta[a] = stride[a].wrapping_mul(self.step[a] as u32);
             lv.t_next[a] = self.exit_t(h, a, cell[a], shift);
@@ -232,14 +237,15 @@ impl DdaRay {
             return false;
         }
         let c = lv.cell[a].wrapping_add_signed(self.step[a]);
-        // Leaving below `lo` wraps to a huge offset, so one comparison covers both ends.
-        if c.wrapping_sub(lv.lo[a]) >= lv.span[a] {
+        if c == lv.end[a] {
             return false;
         }
         lv.cell[a] = c;
         lv.index = lv.index.wrapping_add(lv.delta[a]);
         lv.t_in = t;
-        lv.t_next[a] = self.exit_t(h, a, c, lv.shift);
+        // `a` steps (its `t` is finite): [`DdaRay::exit_t`] without the test for an axis that
+        // never steps.
+        lv.t_next[a] = (h.boundary(a, (c + self.up[a]) << lv.shift) - self.origin[a]) * self.inv[a];
         true
     }
 }
@@ -330,22 +336,31 @@ fn walk<T: TriangleLanes, S: Stats>(
                 cull_t = cull_bound(best_t);
             }
         }
+        // Early exit: the best hit lies in the cells visited so far (see `HIT_MARGIN`).
+        let crossing = cur.crossing();
+        if cull_t < crossing.1 {
+            break 'traverse;
+        }
+        // ADVANCE within this DDA.
+        if dda.advance(h, &mut cur, crossing) {
+            continue 'traverse;
+        }
+        // Once it is done, POP to the DDA it was entered from, and the same there. (The common
+        // step, an advance, stays out of this loop: entering it every step cost its set-up.)
         loop {
-            // Early exit: the best hit lies in the cells visited so far (see `HIT_MARGIN`).
-            let crossing = cur.crossing();
-            if cull_t < crossing.1 {
-                break 'traverse;
-            }
-            // ADVANCE within this DDA, or POP to the one it was entered from once it is done.
-            if dda.advance(h, &mut cur, crossing) {
-                continue 'traverse;
-            }
             let Some(below) = stack.pop() else { break 'traverse };
             let leaving_grid = cur.header != below.header;
             cur = below;
             if leaving_grid {
                 stats.pop();
                 h = &grid.headers[cur.header as usize];
+            }
+            let crossing = cur.crossing();
+            if cull_t < crossing.1 {
+                break 'traverse;
+            }
+            if dda.advance(h, &mut cur, crossing) {
+                continue 'traverse;
             }
         }
     }
