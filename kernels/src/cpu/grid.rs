@@ -107,6 +107,12 @@ struct Level {
     delta: [u32; 3],
     t_in: f32,
     t_next: [f32; 3],
+    /// Where the ray leaves the unit after the current one on axis `a`, computed a step ahead by
+    /// the same arithmetic: a step takes its `t_next` from here instead of waiting on the five
+    /// dependent operations of a boundary. The kernel is bound by that chain, not by its
+    /// instruction count (callgrind dragon 256²: 181 M → 210 M instructions, yet 6 % less time on
+    /// one thread and +10 % Mrays/s at 1024² on two). Past the DDA's range it is a value never read.
+    t_after: [f32; 3],
 }
 
 impl Level {
@@ -185,13 +191,24 @@ impl DdaRay {
         t_in: f32,
     ) -> Level {
         let stride = [1, units[0], units[0] * units[1]];
-        let mut lv = Level { header, shift, cell, end: [0; 3], index: 0, delta: [0; 3], t_in, t_next: [0.0; 3] };
+        let mut lv = Level {
+            header,
+            shift,
+            cell,
+            end: [0; 3],
+            index: 0,
+            delta: [0; 3],
+            t_in,
+            t_next: [0.0; 3],
+            t_after: [0.0; 3],
+        };
         for a in 0..3 {
             // Below `lo` wraps (`lo` = 0 gives u32::MAX), as the step itself does.
             lv.end[a] = if self.step[a] > 0 { lo[a] + span[a] } else { lo[a].wrapping_sub(1) };
             lv.index += stride[a] * cell[a];
             lv.delta[a] = stride[a].wrapping_mul(self.step[a] as u32);
             lv.t_next[a] = self.exit_t(h, a, cell[a], shift);
+            lv.t_after[a] = self.exit_t(h, a, cell[a].wrapping_add_signed(self.step[a]), shift);
         }
         lv
     }
@@ -245,7 +262,9 @@ impl DdaRay {
         lv.t_in = t;
         // `a` steps (its `t` is finite): [`DdaRay::exit_t`] without the test for an axis that
         // never steps.
-        lv.t_next[a] = (h.boundary(a, (c + self.up[a]) << lv.shift) - self.origin[a]) * self.inv[a];
+        lv.t_next[a] = lv.t_after[a];
+        let after = c.wrapping_add_signed(self.step[a]).wrapping_add(self.up[a]) << lv.shift;
+        lv.t_after[a] = (h.boundary(a, after) - self.origin[a]) * self.inv[a];
         true
     }
 }
