@@ -43,11 +43,12 @@
 
 use scenes::{Camera, Ray};
 use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, SUBGRID_BIT};
+use structures::simd::Resolved;
 
 use super::slab;
 use super::stack::Stack;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, LaneWalk, TriangleLanes};
+use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -386,34 +387,31 @@ fn walk<T: TriangleLanes, S: Stats>(
     nearest_hit(&grid.triangles, best_t, best_prim)
 }
 
-/// The walk of one ray, for [`triangle4::run_on`].
-struct GridWalk<'a, S> {
-    grid: &'a Grid,
-    ray: &'a Ray,
-    t_min: f32,
-    t_max: f32,
-    stats: &'a mut S,
-}
-
-impl<S: Stats> LaneWalk for GridWalk<'_, S> {
-    #[inline(always)]
-    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
-        walk(self.grid, self.ray, tris, self.t_min, self.t_max, self.stats)
+impl LaneKernel for Grid {
+    fn isa(&self) -> Resolved {
+        self.isa
     }
-}
 
-/// Runs the walk with the triangle tests of the instruction set the grid was resolved to.
-fn trace<S: Stats>(grid: &Grid, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    triangle4::run_on(grid.isa, ray, GridWalk { grid, ray, t_min, t_max, stats })
+    #[inline(always)]
+    fn walk<T: TriangleLanes, S: Stats>(
+        &self,
+        ray: &Ray,
+        tris: &T,
+        t_min: f32,
+        t_max: f32,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        walk(self, ray, tris, t_min, t_max, stats)
+    }
 }
 
 impl Traverse for Grid {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        triangle4::run_on(self, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        triangle4::run_on(self, ray, t_min, t_max, counters)
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

@@ -25,11 +25,12 @@
 
 use scenes::{Camera, Ray};
 use structures::kdtree::{KdNode, KdTraversal, KdTree, MAX_DEPTH};
+use structures::simd::Resolved;
 
 use super::slab;
 use super::stack::Stack;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, LaneWalk, TriangleLanes};
+use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
@@ -213,41 +214,38 @@ fn trace_restart<T: TriangleLanes, S: Stats>(
     Some(nearest_hit(&tree.triangles, best_t, best_prim))
 }
 
-/// The walk of one ray (`kdtree.traversal`), for [`triangle4::run_on`].
-struct KdWalk<'a, S> {
-    tree: &'a KdTree,
-    ray: &'a Ray,
-    t_min: f32,
-    t_max: f32,
-    stats: &'a mut S,
-}
+impl LaneKernel for KdTree {
+    fn isa(&self) -> Resolved {
+        self.params.simd
+    }
 
-impl<S: Stats> LaneWalk for KdWalk<'_, S> {
+    /// The walk `kdtree.traversal` names.
     #[inline(always)]
-    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
-        let KdWalk { tree, ray, t_min, t_max, stats } = self;
-        match tree.params.traversal {
-            KdTraversal::Stack => trace(tree, ray, tris, t_min, t_max, stats),
-            KdTraversal::Restart => match trace_restart(tree, ray, tris, t_min, t_max, stats) {
+    fn walk<T: TriangleLanes, S: Stats>(
+        &self,
+        ray: &Ray,
+        tris: &T,
+        t_min: f32,
+        t_max: f32,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        match self.params.traversal {
+            KdTraversal::Stack => trace(self, ray, tris, t_min, t_max, stats),
+            KdTraversal::Restart => match trace_restart(self, ray, tris, t_min, t_max, stats) {
                 Some(hit) => hit,
-                None => trace(tree, ray, tris, t_min, t_max, stats),
+                None => trace(self, ray, tris, t_min, t_max, stats),
             },
         }
     }
 }
 
-/// Runs the walk with the triangle tests of the instruction set the tree was resolved to.
-fn trace_any<S: Stats>(tree: &KdTree, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
-    triangle4::run_on(tree.params.simd, ray, KdWalk { tree, ray, t_min, t_max, stats })
-}
-
 impl Traverse for KdTree {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace_any(self, ray, t_min, t_max, &mut NoStats)
+        triangle4::run_on(self, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace_any(self, ray, t_min, t_max, counters)
+        triangle4::run_on(self, ray, t_min, t_max, counters)
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

@@ -26,11 +26,12 @@
 use scenes::{Camera, Ray};
 use structures::bvh4::layout::WIDTH;
 use structures::octree::{MAX_DEPTH, TriOctree, layout};
+use structures::simd::Resolved;
 
 use super::kdtree::MARGIN;
 use super::slab;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, LaneWalk, TriangleLanes};
+use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
 
@@ -121,19 +122,21 @@ impl Frame {
     }
 }
 
-/// The walk of one ray, for [`triangle4::run_on`].
-struct OctreeWalk<'a, S> {
-    tree: &'a TriOctree,
-    ray: &'a Ray,
-    t_min: f32,
-    t_max: f32,
-    stats: &'a mut S,
-}
+impl LaneKernel for TriOctree {
+    fn isa(&self) -> Resolved {
+        self.params.simd
+    }
 
-impl<S: Stats> LaneWalk for OctreeWalk<'_, S> {
     #[inline(always)]
-    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit> {
-        walk(self.tree, self.ray, tris, self.t_min, self.t_max, self.stats)
+    fn walk<T: TriangleLanes, S: Stats>(
+        &self,
+        ray: &Ray,
+        tris: &T,
+        t_min: f32,
+        t_max: f32,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        walk(self, ray, tris, t_min, t_max, stats)
     }
 }
 
@@ -142,7 +145,7 @@ fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &
     if !ray_is_traceable(ray, t_min, t_max) {
         return None;
     }
-    triangle4::run_on(tree.params.simd, ray, OctreeWalk { tree, ray, t_min, t_max, stats })
+    triangle4::run_on(tree, ray, t_min, t_max, stats)
 }
 
 /// The parametric walk, testing the triangles of each leaf it reaches with `tris`: those not in

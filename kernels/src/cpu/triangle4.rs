@@ -17,27 +17,44 @@ use structures::bvh4::layout::{Tri4, WIDTH};
 use structures::simd::{Isa, Resolved};
 
 use super::triangle::ShearedRay;
-use crate::Hit;
+use crate::{Hit, Stats};
 
-/// A kernel's traversal, written once over any [`TriangleLanes`], handed to [`run_on`] to run
-/// with the triangle tests of the structure's instruction set.
-pub(crate) trait LaneWalk {
-    fn walk<T: TriangleLanes>(self, tris: &T) -> Option<Hit>;
+/// A structure whose traversal is written once over any [`TriangleLanes`]: [`run_on`] runs it
+/// with the triangle tests of the instruction set the structure was resolved to.
+pub(crate) trait LaneKernel {
+    /// The instruction set the structure's triangles are tested with (`simd`).
+    fn isa(&self) -> Resolved;
+
+    /// The nearest hit of `ray` within `(t_min, t_max)`, its triangles tested by `tris`.
+    fn walk<T: TriangleLanes, S: Stats>(
+        &self,
+        ray: &Ray,
+        tris: &T,
+        t_min: f32,
+        t_max: f32,
+        stats: &mut S,
+    ) -> Option<Hit>;
 }
 
-/// Runs `walk` for `ray` with the triangle tests of `isa`: four SSE lanes (the whole walk
-/// compiled with SSE4.1) or the scalar test one triangle at a time.
+/// Runs `kernel`'s walk for `ray` with the triangle tests of its instruction set: four SSE lanes
+/// (the whole walk compiled with SSE4.1) or the scalar test one triangle at a time.
 #[allow(unsafe_code)]
 #[inline(always)]
-pub(crate) fn run_on<W: LaneWalk>(isa: Resolved, ray: &Ray, walk: W) -> Option<Hit> {
-    match isa.isa() {
+pub(crate) fn run_on<K: LaneKernel, S: Stats>(
+    kernel: &K,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
+    match kernel.isa().isa() {
         // SAFETY: `walk_sse4` needs SSE4.1. A `structures::simd::Resolved` holds `Sse4` only
         // where `is_x86_feature_detected!("sse4.1")` found it (its field is private, and its only
         // constructors resolve against detection), so this CPU has it. Exercised on every
-        // built-in scene by tests/tests/simd.rs (the grids and the triangle octree).
+        // built-in scene by tests/tests/simd.rs (the grids, the kd-tree and the triangle octree).
         #[cfg(target_arch = "x86_64")]
-        Isa::Sse4 => unsafe { sse::walk_sse4(ray, walk) },
-        _ => walk.walk(&Scalar::new(ray)),
+        Isa::Sse4 => unsafe { sse::walk_sse4(kernel, ray, t_min, t_max, stats) },
+        _ => kernel.walk(ray, &Scalar::new(ray), t_min, t_max, stats),
     }
 }
 
@@ -67,16 +84,8 @@ pub(crate) trait TriangleLanes {
         }
         let mut found = false;
         for quad in ids.chunks(WIDTH) {
-            let (mut mask, t) = self.listed(tris, quad, t_min, *best_t);
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if t[lane] < *best_t {
-                    *best_t = t[lane];
-                    *best_prim = quad[lane];
-                    found = true;
-                }
-            }
+            let (mask, t) = self.listed(tris, quad, t_min, *best_t);
+            found |= take_nearest(mask, t, |lane| quad[lane], best_t, best_prim);
         }
         found
     }
@@ -95,15 +104,30 @@ pub(crate) fn nearest_in_blocks<T: TriangleLanes>(
 ) -> bool {
     let mut found = false;
     for block in blocks {
-        let (mut mask, t) = tris.block(block, t_min, *best_t);
-        while mask != 0 {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            if t[lane] < *best_t {
-                *best_t = t[lane];
-                *best_prim = block.prim[lane];
-                found = true;
-            }
+        let (mask, t) = tris.block(block, t_min, *best_t);
+        found |= take_nearest(mask, t, |lane| block.prim[lane], best_t, best_prim);
+    }
+    found
+}
+
+/// The hit lanes of `mask` taken in lane order against the best hit so far, with a strict `<`
+/// (the first of equal `t` wins, as in the scalar loop); `prim(lane)` names a lane's triangle.
+#[inline(always)]
+fn take_nearest(
+    mut mask: u32,
+    t: [f32; WIDTH],
+    prim: impl Fn(usize) -> u32,
+    best_t: &mut f32,
+    best_prim: &mut u32,
+) -> bool {
+    let mut found = false;
+    while mask != 0 {
+        let lane = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        if t[lane] < *best_t {
+            *best_t = t[lane];
+            *best_prim = prim(lane);
+            found = true;
         }
     }
     found
@@ -278,10 +302,16 @@ mod sse {
         [[ax, ay, az], [bx, by, bz], [cx, cy, cz]]
     }
 
-    /// `walk` with SSE4.1 enabled throughout, its triangles tested four at a time.
+    /// `kernel`'s walk with SSE4.1 enabled throughout, its triangles tested four at a time.
     #[target_feature(enable = "sse4.1")]
-    pub(super) fn walk_sse4<W: LaneWalk>(ray: &Ray, walk: W) -> Option<Hit> {
-        walk.walk(&Sse::new(ray))
+    pub(super) fn walk_sse4<K: LaneKernel, S: Stats>(
+        kernel: &K,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        kernel.walk(ray, &Sse::new(ray), t_min, t_max, stats)
     }
 
     /// Unreachable stand-in for a row past a triangle's nine floats (`at` is at most 5).
