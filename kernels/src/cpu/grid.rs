@@ -160,8 +160,15 @@ impl DdaRay {
     fn exit_t(&self, h: &GridHeader, a: usize, c: u32, shift: u32) -> f32 {
         match self.step[a] {
             0 => f32::INFINITY,
-            _ => (h.boundary(a, (c + self.up[a]) << shift) - self.origin[a]) * self.inv[a],
+            _ => self.face_t(h, a, (c + self.up[a]) << shift),
         }
+    }
+
+    /// Where the ray meets boundary `i` of grid `h` on a stepping axis `a`: the one arithmetic
+    /// every exit `t` comes from, so neighbouring units share theirs bit for bit.
+    #[inline(always)]
+    fn face_t(&self, h: &GridHeader, a: usize, i: u32) -> f32 {
+        (h.boundary(a, i) - self.origin[a]) * self.inv[a]
     }
 
     /// The cell of grid `h` holding the ray's point at `t`, per axis (see "Start cells").
@@ -261,11 +268,11 @@ impl DdaRay {
         lv.cell[a] = c;
         lv.index = lv.index.wrapping_add(lv.delta[a]);
         lv.t_in = t;
-        // `a` steps (its `t` is finite): [`DdaRay::exit_t`] without the test for an axis that
-        // never steps.
+        // The exit of the unit after `c`, a step ahead: `a` steps (its `t` is finite), so no test
+        // for an axis that never steps.
         lv.t_next[a] = lv.t_after[a];
         let after = c.wrapping_add_signed(self.step[a]).wrapping_add(self.up[a]) << lv.shift;
-        lv.t_after[a] = (h.boundary(a, after) - self.origin[a]) * self.inv[a];
+        lv.t_after[a] = self.face_t(h, a, after);
         true
     }
 }
