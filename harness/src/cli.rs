@@ -468,7 +468,13 @@ impl Preset {
                 (vec!["org.layout=blocks".into()], Some("blocks".into())),
                 (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into())),
             ],
-            (Preset::OrgFast, "bvh4") => vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))],
+            // The wide BVH at both widths: 4-wide (SSE) and its scalar form, and 8-wide (AVX2),
+            // Embree's node width on this kind of machine.
+            (Preset::OrgFast, "bvh4") => vec![
+                (Vec::new(), None),
+                (vec!["simd=scalar".into()], Some("scalar".into())),
+                (vec!["bvh4.width=8".into()], Some("8-wide".into())),
+            ],
             (Preset::OrgFast, "embree") => {
                 vec![(Vec::new(), None), (vec!["embree.robust=on".into()], Some("robust".into()))]
             }

@@ -44,14 +44,18 @@ pub static STRUCTURES: &[StructureEntry] = &[
     StructureEntry {
         name: "bvh4",
         family: "triangle",
-        summary: "the reference BVH collapsed to 4-wide nodes, 4-triangle blocks, SSE traversal bit for bit the \
-                  scalar tests' (simd=auto|scalar|sse4)",
-        params: &["bvh.preset", "simd"],
+        summary: "the reference BVH collapsed to 4-wide nodes (SSE) or 8-wide (bvh4.width=8, AVX2), 4-triangle \
+                  blocks, SIMD traversal bit for bit the scalar tests' (simd=auto|scalar|sse4|avx2)",
+        params: &["bvh.preset", structures::bvh4::WIDTH_KEY, "simd"],
         check: |p| {
             bvh_preset_check(p)?;
-            structures::simd::SimdChoice::from_params(p)?.resolve(&structures::bvh4::build::SUPPORTED).map(drop)
+            let width = structures::bvh4::Width::from_params(p)?;
+            structures::simd::SimdChoice::from_params(p)?.resolve(width.supported()).map(drop)
         },
-        build: |input| Ok(Box::new(structures::bvh4::Bvh4::build(input)?)),
+        build: |input| match structures::bvh4::Width::from_params(input.params)? {
+            structures::bvh4::Width::Four => Ok(Box::new(structures::bvh4::Bvh4::build(input)?)),
+            structures::bvh4::Width::Eight => Ok(Box::new(structures::bvh4::Bvh8::build(input)?)),
+        },
         available: always,
     },
     StructureEntry {

@@ -8,7 +8,7 @@
 //! | module | structure | spec |
 //! |---|---|---|
 //! | [`bvh`] | reference BVH (obvhs PLOC build, flattened) | §4.5 last item |
-//! | [`bvh4`] | the reference BVH collapsed to 4-wide nodes, 4-triangle blocks (SIMD) | issue 30 |
+//! | [`bvh4`] | the reference BVH collapsed to 4- or 8-wide nodes, 4-triangle blocks (SIMD) | issue 30 |
 //! | [`grid`] | UG, RG, RG-2 and ORG in one compact layout | §4.5, seed 002 |
 //! | [`kdtree`] | SAH kd-tree (Wald & Havran 2006), 8-byte nodes | seed 002, issue 29 |
 //! | [`octree`] | octree over triangles, breadth-first child/leaf masks | seed 002, issue 29 |

@@ -76,6 +76,9 @@ impl Resolved {
 /// The instruction sets of a kernel whose tests run four lanes of SSE, or the scalar tests.
 pub const FOUR_LANES: [Isa; 2] = [Isa::Scalar, Isa::Sse4];
 
+/// The instruction sets of a kernel whose tests run eight lanes of AVX2, or the scalar tests.
+pub const EIGHT_LANES: [Isa; 2] = [Isa::Scalar, Isa::Avx2];
+
 /// The `simd` parameter: `auto` (the default) or an instruction set by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SimdChoice {

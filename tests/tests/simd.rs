@@ -1,5 +1,5 @@
-//! The 4-wide BVH and its SIMD kernel (issue 30): exact against brute force on every built-in
-//! scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
+//! The wide BVH (4-wide, and 8-wide with `bvh4.width=8`) and its SIMD kernel (issue 30): exact
+//! against brute force on every built-in scene — the same nearest triangle and `t` bit for bit, the smaller index winning equal `t`s —
 //! and its SIMD path bit for bit its scalar form (hits, normals and every counter) on every
 //! instruction set this machine has, forced one after another; and every grid's cell lists tested
 //! and the kd-tree's and triangle octree's leaves tested four triangles at a time bit for bit as one at a time,
@@ -9,8 +9,8 @@ use kernels::cpu::brute_force;
 use kernels::{Counters, Hit, Traverse};
 use rayon::prelude::*;
 use scenes::{Camera, Ray, Scene, Triangle};
-use structures::bvh4::Bvh4;
 use structures::bvh4::layout::{EMPTY, NO_PRIM, leaf_blocks};
+use structures::bvh4::{Bvh4, Bvh8, WideBvh};
 use structures::grid::{Grid, GridKind};
 use structures::kdtree::KdTree;
 use structures::octree::TriOctree;
@@ -21,9 +21,14 @@ use tests::ray_set;
 const RAYS_PER_SCENE: usize = 10_002;
 
 fn build(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> Bvh4 {
-    let params = Params::default();
-    let bvh = Bvh4::build(&BuildInput { scene, triangles, params: &params }).expect("bvh4 builds");
-    bvh.validate().unwrap_or_else(|e| panic!("{}: invalid bvh4: {e}", scene.name));
+    build_wide(scene, triangles)
+}
+
+/// The `W`-wide tree of `scene`, validated.
+fn build_wide<const W: usize>(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> WideBvh<W> {
+    let params = Params::parse([format!("bvh4.width={W}").as_str()]).expect("parses");
+    let bvh = WideBvh::<W>::build(&BuildInput { scene, triangles, params: &params }).expect("bvh4 builds");
+    bvh.validate().unwrap_or_else(|e| panic!("{}: invalid {W}-wide bvh4: {e}", scene.name));
     bvh
 }
 
@@ -68,10 +73,13 @@ trait Lanes: Traverse + Sync {
     fn set_isa(&mut self, isa: Isa);
 }
 
-impl Lanes for Bvh4 {
-    const SUPPORTED: &'static [Isa] = &structures::bvh4::build::SUPPORTED;
+impl<const W: usize> Lanes for WideBvh<W>
+where
+    WideBvh<W>: Traverse,
+{
+    const SUPPORTED: &'static [Isa] = &WideBvh::<W>::SUPPORTED;
     fn set_isa(&mut self, isa: Isa) {
-        self.isa = Resolved::forced(isa, Self::SUPPORTED).expect("detected");
+        self.isa = Resolved::forced(isa, <Self as Lanes>::SUPPORTED).expect("detected");
     }
 }
 
@@ -131,7 +139,7 @@ fn assert_simd_is_scalar<L: Lanes>(accel: &mut L, rays: &[Ray], what: &str) -> V
     accel.set_isa(Isa::Scalar);
     let scalar = traced(accel, rays, what);
     let sets = simd_sets::<L>();
-    assert!(!sets.is_empty() || !Isa::Sse4.available(), "{what}: this CPU has SSE4.1 but no SIMD path was tried");
+    assert!(!sets.is_empty() || !Isa::Avx2.available(), "{what}: this CPU has AVX2 but no SIMD path was tried");
     for isa in sets {
         accel.set_isa(isa);
         assert_same(&scalar, &traced(accel, rays, what), &format!("{what}: {} against scalar", isa.name()));
@@ -151,12 +159,45 @@ fn scene_rays(scene: &Scene, triangles: &[Triangle], name: &str) -> (Vec<Ray>, V
 fn check_scene(name: &str) {
     let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
     let triangles = scene.triangles();
-    let mut bvh = build(&scene, triangles.clone());
     let (rays, primary) = scene_rays(&scene, &triangles, name);
+    let mut bvh = build(&scene, triangles.clone());
     let hits = assert_brute_force(&bvh, &triangles, &rays, name);
     assert!(hits > rays.len() / 10, "{name}: only {hits} of {} rays hit", rays.len());
-    assert_simd_is_scalar(&mut bvh, &rays, name);
+    let four = assert_simd_is_scalar(&mut bvh, &rays, name);
     assert_simd_is_scalar(&mut bvh, &primary, &format!("{name} primary"));
+
+    let mut bvh8: Bvh8 = build_wide(&scene, triangles.clone());
+    let filled = bvh8.nodes.iter().map(|n| n.child.iter().filter(|&&c| c != EMPTY).count()).max().unwrap_or(0);
+    assert!(filled > 4 || triangles.len() < 64, "{name}: no 8-wide node holds more than {filled} children");
+    assert_brute_force(&bvh8, &triangles, &rays, &format!("{name} 8-wide"));
+    let eight = assert_simd_is_scalar(&mut bvh8, &rays, &format!("{name} 8-wide"));
+    assert_simd_is_scalar(&mut bvh8, &primary, &format!("{name} 8-wide primary"));
+    // Both widths hold the same triangles and break ties alike: the same hits, normals included
+    // (their counters differ: the trees do).
+    let hits_of = |traced: &[Traced]| traced.iter().map(|(hit, _)| *hit).collect::<Vec<_>>();
+    assert!(hits_of(&four) == hits_of(&eight), "{name}: the 8-wide tree's hits differ from the 4-wide tree's");
+}
+
+/// A width other than the builder's, or an instruction set the width's kernel lacks, is refused.
+#[test]
+fn widths_refuse_what_they_cannot_run() {
+    let scene = scenes::load_scene("teapot").expect("built in");
+    let refused = |width: &str, given: &[&str]| {
+        let params = Params::parse(given.iter().copied()).expect("parses");
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+        let err = match width {
+            "4" => Bvh4::build(&input).err(),
+            _ => Bvh8::build(&input).err(),
+        };
+        err.map(|e| e.to_string())
+    };
+    assert!(refused("4", &["bvh4.width=8"]).is_some_and(|e| e.contains("bvh4.width")));
+    assert!(refused("8", &[]).is_some_and(|e| e.contains("bvh4.width")), "an 8-wide builder asked for 4");
+    assert!(refused("8", &["bvh4.width=8", "simd=sse4"]).is_some_and(|e| e.contains("not implemented")));
+    assert!(refused("4", &["bvh4.width=6"]).is_some_and(|e| e.contains("is not one of 4, 8")));
+    if Isa::Avx2.available() {
+        assert!(refused("8", &["bvh4.width=8", "simd=avx2"]).is_none());
+    }
 }
 
 tests::per_builtin_scene!(check_scene);
@@ -245,6 +286,10 @@ fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
     let triangles = scene.triangles();
     let cases: &[(&str, &[&str])] = &[
         ("bvh", &[]),
+        ("bvh4", &[]),
+        ("bvh4", &["simd=scalar"]),
+        ("bvh4", &["bvh4.width=8"]),
+        ("bvh4", &["bvh4.width=8", "simd=scalar"]),
         ("ug", &[]),
         ("ug", &["simd=scalar"]),
         ("rg", &[]),

@@ -1,11 +1,11 @@
 //! The SIMD layer of the CPU kernels (issue 30): 4-lane `f32` vectors and masks over `std::arch`
-//! SSE, with exactly the IEEE semantics of the scalar code they stand in for.
+//! SSE, and 8-lane ones over AVX, with exactly the IEEE semantics of the scalar code they stand in for.
 //!
 //! Bit-identical to the scalar kernels by construction (`../shared/research/simd_parity.md` §4):
 //! - only `+ − × ÷` and comparisons, each correctly rounded in IEEE single precision as the
 //!   scalar operations are; no fused multiply-add (Rust never contracts `a * b + c` either), no
 //!   approximate reciprocal;
-//! - [`F32x4::max_sel`] / [`F32x4::min_sel`] are `maxps` / `minps`, which return their *second*
+//! - [`F32x4::max_sel`] / [`F32x4::min_sel`] (and [`F32x8`]'s) are `maxps` / `minps`, which return their *second*
 //!   operand when the first does not compare greater (less): `a.max_sel(b)` is the scalar
 //!   `if a > b { a } else { b }` lane by lane, NaN and ±0 included (`f32::max` is not: it drops a
 //!   NaN and may return either zero).
@@ -17,7 +17,131 @@
 //! run the scalar tests (`simd=scalar`, which `auto` picks there).
 
 #[cfg(target_arch = "x86_64")]
+pub use avx::{Avx, F32x8};
+#[cfg(target_arch = "x86_64")]
 pub use sse::{F32x4, M32x4};
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod avx {
+    //! Eight lanes, for the boxes of an 8-wide node. AVX is not part of the x86-64 baseline, so
+    //! unlike SSE these operations are sound only on a CPU that has it: an [`F32x8`] can only be
+    //! made through an [`Avx`] token ([`Avx::splat`], [`Avx::load`]), and the only way to get a
+    //! token is the `unsafe` [`Avx::assume`], whose caller promises that this CPU has AVX.
+    //!
+    //! SAFETY (every other `unsafe` block of this module): each calls one AVX intrinsic, on
+    //! values or on a reference to eight `f32`s (valid for the 32 bytes read or written). Those
+    //! intrinsics need AVX at run time, which an `F32x8` or `Avx` in hand proves (above).
+    //! Exercised by this module's tests and by tests/tests/simd.rs through `bvh4.width=8`.
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Mul, Sub};
+
+    /// Proof that this CPU has AVX: what every 8-lane value is made with.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Avx(());
+
+    impl Avx {
+        /// The token.
+        ///
+        /// # Safety
+        /// The CPU running the program must have AVX (`is_x86_feature_detected!("avx")`).
+        #[inline(always)]
+        pub unsafe fn assume() -> Self {
+            Avx(())
+        }
+
+        #[inline(always)]
+        pub fn splat(self, x: f32) -> F32x8 {
+            F32x8(unsafe { _mm256_set1_ps(x) })
+        }
+
+        #[inline(always)]
+        pub fn load(self, lanes: &[f32; 8]) -> F32x8 {
+            F32x8(unsafe { _mm256_loadu_ps(lanes.as_ptr()) })
+        }
+    }
+
+    /// Eight `f32` lanes.
+    #[derive(Clone, Copy, Debug)]
+    #[repr(transparent)]
+    pub struct F32x8(__m256);
+
+    impl F32x8 {
+        #[inline(always)]
+        pub fn to_array(self) -> [f32; 8] {
+            let mut lanes = [0.0; 8];
+            unsafe { _mm256_storeu_ps(lanes.as_mut_ptr(), self.0) };
+            lanes
+        }
+
+        /// `if self > other { self } else { other }` per lane (`vmaxps`, `maxps`'s rule).
+        #[inline(always)]
+        pub fn max_sel(self, other: Self) -> Self {
+            Self(unsafe { _mm256_max_ps(self.0, other.0) })
+        }
+
+        /// `if self < other { self } else { other }` per lane (`vminps`).
+        #[inline(always)]
+        pub fn min_sel(self, other: Self) -> Self {
+            Self(unsafe { _mm256_min_ps(self.0, other.0) })
+        }
+
+        /// One bit per lane where `self <= other` (false where either is NaN, as the scalar
+        /// `<=`), lane 0 lowest.
+        #[inline(always)]
+        pub fn le_bits(self, other: Self) -> u32 {
+            unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, other.0)) as u32 }
+        }
+    }
+
+    macro_rules! binary {
+        ($trait:ident, $method:ident, $intrinsic:ident) => {
+            impl $trait for F32x8 {
+                type Output = F32x8;
+                #[inline(always)]
+                fn $method(self, other: F32x8) -> F32x8 {
+                    F32x8(unsafe { $intrinsic(self.0, other.0) })
+                }
+            }
+        };
+    }
+
+    binary!(Add, add, _mm256_add_ps);
+    binary!(Sub, sub, _mm256_sub_ps);
+    binary!(Mul, mul, _mm256_mul_ps);
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        /// Every lane operation against the scalar expression it stands for, bit for bit, on
+        /// every lane (each lane holds a different pair), where this CPU has AVX.
+        #[test]
+        fn eight_lanes_are_the_scalar_operations_bit_for_bit() {
+            if !std::arch::is_x86_feature_detected!("avx") {
+                eprintln!("no AVX on this CPU: the 8-lane operations are never used here");
+                return;
+            }
+            // SAFETY: detected just above.
+            let avx = unsafe { Avx::assume() };
+            let specials = [0.0, -0.0, 1.0, -1.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-40, -3e38];
+            for &a in &specials {
+                let lanes: [f32; 8] = std::array::from_fn(|i| specials[i]);
+                let (va, vb) = (avx.splat(a), avx.load(&lanes));
+                let per_lane = |v: F32x8, f: &dyn Fn(f32) -> f32| {
+                    v.to_array().iter().zip(&lanes).all(|(x, &b)| x.to_bits() == f(b).to_bits())
+                };
+                assert!(per_lane(va + vb, &|b| a + b) && per_lane(va - vb, &|b| a - b), "{a}");
+                assert!(per_lane(va * vb, &|b| a * b), "{a}");
+                assert!(per_lane(va.max_sel(vb), &|b| if a > b { a } else { b }), "max {a}");
+                assert!(per_lane(va.min_sel(vb), &|b| if a < b { a } else { b }), "min {a}");
+                let want = lanes.iter().enumerate().fold(0, |m, (i, &b)| m | (u32::from(a <= b) << i));
+                assert_eq!(va.le_bits(vb), want, "le {a}");
+            }
+            assert_eq!(avx.load(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]).to_array()[7], 8.0, "lane order kept");
+        }
+    }
+}
 
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]

@@ -1,25 +1,29 @@
-//! Collapses the reference BVH2 into 4-wide nodes and copies its leaves' triangles into blocks.
+//! Collapses the reference BVH2 into 4- or 8-wide nodes and copies its leaves' triangles into blocks.
 //!
 //! The binary tree is the reference's own (`structures::bvh::build`, obvhs PLOC with its leaf
 //! collapse), so the wide tree differs from it in width alone — the comparison issue 30 asks for.
 //! Each wide node takes its BVH2 node's two children and keeps opening the inner child of largest
-//! surface area until it has four (the greedy collapse of Wald, Benthin & Boulos 2008 and of
+//! surface area until it has `W` (the greedy collapse of Wald, Benthin & Boulos 2008 and of
 //! Embree's `BVHNBuilder`); a BVH2 leaf becomes a wide leaf of ⌈count / 4⌉ blocks.
 
-use super::Bvh4;
-use super::layout::{Bvh4Node, MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, leaf};
+use super::layout::{MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, WideNode, leaf};
+use super::{WIDTH_KEY, WideBvh, Width};
 use crate::bvh::{Bvh, BvhNode};
-use crate::simd::{Isa, SimdChoice};
+use crate::simd::SimdChoice;
 use crate::{BuildError, BuildInput};
 
-/// The instruction sets the 4-wide kernel is written for.
-pub const SUPPORTED: [Isa; 2] = crate::simd::FOUR_LANES;
-
-pub fn build(input: &BuildInput) -> Result<Bvh4, BuildError> {
-    let isa = SimdChoice::from_params(input.params)?.resolve(&SUPPORTED)?;
+pub fn build<const W: usize>(input: &BuildInput) -> Result<WideBvh<W>, BuildError> {
+    let width = Width::from_params(input.params)?;
+    if (width == Width::Eight) != (W == 8) {
+        return Err(BuildError::BadParam {
+            key: WIDTH_KEY.into(),
+            detail: format!("asked for {width:?} children per node of a {W}-wide builder"),
+        });
+    }
+    let isa = SimdChoice::from_params(input.params)?.resolve(&WideBvh::<W>::SUPPORTED)?;
     let binary = crate::bvh::build(input)?;
-    let (nodes, blocks, depth) = collapse(&binary)?;
-    let bvh = Bvh4 { nodes, blocks, triangles: binary.triangles.clone(), preset: binary.preset, depth, isa };
+    let (nodes, blocks, depth) = collapse::<W>(&binary)?;
+    let bvh = WideBvh { nodes, blocks, triangles: binary.triangles.clone(), preset: binary.preset, depth, isa };
     debug_assert!(bvh.validate().is_ok());
     Ok(bvh)
 }
@@ -30,8 +34,8 @@ fn area(n: &BvhNode) -> f32 {
 }
 
 /// The wide nodes (root first, every child after its parent), the blocks and the depth in nodes.
-fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildError> {
-    let mut nodes = vec![Bvh4Node::EMPTY_NODE];
+fn collapse<const W: usize>(binary: &Bvh) -> Result<(Vec<WideNode<W>>, Vec<Tri4>, usize), BuildError> {
+    let mut nodes = vec![WideNode::EMPTY_NODE];
     let mut blocks = Vec::with_capacity(binary.refs.len().div_ceil(WIDTH));
     if binary.triangles.is_empty() {
         return Ok((nodes, blocks, 1));
@@ -46,14 +50,14 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
         pending.push((0usize, 0usize, 1usize));
     }
     let mut depth = 1;
-    let mut children: Vec<usize> = Vec::with_capacity(WIDTH);
-    let mut inner = Vec::with_capacity(WIDTH);
+    let mut children: Vec<usize> = Vec::with_capacity(W);
+    let mut inner = Vec::with_capacity(W);
     while let Some((src, dst, level)) = pending.pop() {
         depth = depth.max(level);
         let first = binary.nodes[src].first as usize;
         children.clear();
         children.extend([first, first + 1]);
-        while children.len() < WIDTH {
+        while children.len() < W {
             let widest = children
                 .iter()
                 .enumerate()
@@ -64,7 +68,7 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
             children[slot] = grand;
             children.push(grand + 1);
         }
-        let mut node = Bvh4Node::EMPTY_NODE;
+        let mut node = WideNode::EMPTY_NODE;
         // Inner children are laid out in slot order after the node, depth first.
         inner.clear();
         for (slot, &c) in children.iter().enumerate() {
@@ -73,7 +77,7 @@ fn collapse(binary: &Bvh) -> Result<(Vec<Bvh4Node>, Vec<Tri4>, usize), BuildErro
                 leaf_word(binary, n, &mut blocks)?
             } else {
                 let index = nodes.len() as u32;
-                nodes.push(Bvh4Node::EMPTY_NODE);
+                nodes.push(WideNode::EMPTY_NODE);
                 inner.push((c, index as usize, level + 1));
                 index
             };

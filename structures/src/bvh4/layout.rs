@@ -1,25 +1,35 @@
-//! The 4-wide BVH's words, exactly as its kernels read them (`kernels::cpu::bvh4`): nodes with
-//! their four children's boxes side by side, and leaves of triangles copied into 4-lane blocks.
+//! The wide BVH's words, exactly as its kernels read them (`kernels::cpu::bvh4`): nodes with
+//! their 4 or 8 children's boxes side by side, and leaves of triangles copied into 4-lane blocks.
 
 use bytemuck::{Pod, Zeroable};
 
-/// Children per node and triangles per leaf block: the lanes of one SSE register.
+/// Triangles per leaf block: the lanes of one SSE register. Both node widths keep 4-triangle
+/// blocks, as Embree's BVH8 does (its triangle leaves are `Triangle4`s under 8-wide nodes too).
 pub const WIDTH: usize = 4;
 
-/// One node, 112 bytes: the four children's boxes as structure-of-arrays, so one 4-lane slab
-/// test reads each bound of all four with one load (`lo[axis][slot]`), and their child words.
-/// An unused slot holds [`EMPTY`] and the empty box (`lo` = +∞, `hi` = −∞), which no ray enters,
-/// so the kernels test all four slots without looking at the count.
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct Bvh4Node {
-    pub lo: [[f32; WIDTH]; 3],
-    pub hi: [[f32; WIDTH]; 3],
+/// One node of a `W`-wide tree: the children's boxes as structure-of-arrays, so one `W`-lane
+/// slab test reads each bound of all of them with one load (`lo[axis][slot]`), and their child
+/// words. An unused slot holds [`EMPTY`] and the empty box (`lo` = +∞, `hi` = −∞), which no ray
+/// enters, so the kernels test every slot without looking at the count.
+///
+/// Cache-line aligned, as Embree's nodes are: 128 bytes for 4 children (16 of them padding) and
+/// 256 for 8, so a node spans exactly two or four lines and no 8-lane load of a bound splits a
+/// line (at 16-byte alignment half of them would, and a 4-wide node would touch three lines in two).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WideNode<const W: usize> {
+    pub lo: [[f32; W]; 3],
+    pub hi: [[f32; W]; 3],
     /// Per slot: an inner child's node index, a leaf ([`leaf`]), or [`EMPTY`].
-    pub child: [u32; WIDTH],
+    pub child: [u32; W],
 }
 
-const _: () = assert!(size_of::<Bvh4Node>() == 112);
+/// A node of the 4-wide tree (SSE).
+pub type Bvh4Node = WideNode<4>;
+/// A node of the 8-wide tree (AVX2).
+pub type Bvh8Node = WideNode<8>;
+
+const _: () = assert!(size_of::<Bvh4Node>() == 128 && size_of::<Bvh8Node>() == 256);
 
 /// Up to four triangles of one leaf, vertices as structure-of-arrays (`v[vertex][axis][lane]`),
 /// copied in leaf order from the scene's soup (no reference array to read through), 160 bytes.
@@ -65,10 +75,10 @@ pub const fn is_leaf(word: u32) -> bool {
     word & LEAF_BIT != 0
 }
 
-impl Bvh4Node {
+impl<const W: usize> WideNode<W> {
     /// A node with every slot unused.
-    pub const EMPTY_NODE: Bvh4Node =
-        Bvh4Node { lo: [[f32::INFINITY; WIDTH]; 3], hi: [[f32::NEG_INFINITY; WIDTH]; 3], child: [EMPTY; WIDTH] };
+    pub const EMPTY_NODE: Self =
+        Self { lo: [[f32::INFINITY; W]; 3], hi: [[f32::NEG_INFINITY; W]; 3], child: [EMPTY; W] };
 
     /// Puts a child with box `[lo, hi]` in `slot`.
     pub fn set(&mut self, slot: usize, lo: [f32; 3], hi: [f32; 3], child: u32) {

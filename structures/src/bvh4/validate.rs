@@ -1,9 +1,9 @@
-//! Structural checks of the 4-wide BVH, used by the builder (debug) and the tests.
+//! Structural checks of the wide BVH, used by the builder (debug) and the tests.
 
-use super::Bvh4;
-use super::layout::{Bvh4Node, EMPTY, NO_PRIM, WIDTH, is_leaf, leaf_blocks};
+use super::WideBvh;
+use super::layout::{EMPTY, NO_PRIM, WIDTH, WideNode, is_leaf, leaf_blocks};
 
-impl Bvh4 {
+impl<const W: usize> WideBvh<W> {
     /// Checks that every node is reachable once, children follow their parent (what bounds the
     /// traversal loop), unused slots hold the empty box, child boxes hold what they bound, every
     /// block lane is the soup's triangle bit for bit (or an empty lane after the used ones), and
@@ -21,11 +21,11 @@ impl Bvh4 {
             if std::mem::replace(&mut reached[i], true) {
                 return Err(format!("node {i} reached twice"));
             }
-            for slot in 0..WIDTH {
+            for slot in 0..W {
                 let word = node.child[slot];
                 let (lo, hi) = node.bounds(slot);
                 if word == EMPTY {
-                    let empty = Bvh4Node::EMPTY_NODE.bounds(0);
+                    let empty = WideNode::<W>::EMPTY_NODE.bounds(0);
                     if (lo, hi) != empty {
                         return Err(format!("node {i} slot {slot}: unused slot without the empty box"));
                     }
@@ -76,7 +76,7 @@ impl Bvh4 {
                         return Err(format!("node {i} slot {slot}: child {c} does not follow its parent"));
                     }
                     let child = self.nodes.get(c).ok_or_else(|| format!("node {i}: child {c} out of range"))?;
-                    for s in 0..WIDTH {
+                    for s in 0..W {
                         if child.child[s] != EMPTY {
                             let (clo, chi) = child.bounds(s);
                             if !(inside(clo) && inside(chi)) {
