@@ -46,9 +46,10 @@ pub static STRUCTURES: &[StructureEntry] = &[
         family: "triangle",
         summary: "the reference BVH collapsed to 4-wide nodes (SSE) or 8-wide (bvh4.width=8, AVX2), 4-triangle \
                   blocks, SIMD traversal bit for bit the scalar tests' (simd=auto|scalar|sse4|avx2)",
-        params: &["bvh.preset", structures::bvh4::WIDTH_KEY, "simd"],
+        params: &["bvh.preset", structures::bvh4::WIDTH_KEY, structures::bvh4::build::Leaves::KEY, "simd"],
         check: |p| {
             bvh_preset_check(p)?;
+            structures::bvh4::build::Leaves::from_params(p)?;
             let width = structures::bvh4::Width::from_params(p)?;
             structures::simd::SimdChoice::from_params(p)?.resolve(width.supported()).map(drop)
         },

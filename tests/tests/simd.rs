@@ -26,7 +26,13 @@ fn build(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> Bvh4 {
 
 /// The `W`-wide tree of `scene`, validated.
 fn build_wide<const W: usize>(scene: &Scene, triangles: std::sync::Arc<[Triangle]>) -> WideBvh<W> {
-    let params = Params::parse([format!("bvh4.width={W}").as_str()]).expect("parses");
+    build_with(scene, triangles, &[])
+}
+
+/// The `W`-wide tree of `scene` with parameters `given`, validated.
+fn build_with<const W: usize>(scene: &Scene, triangles: std::sync::Arc<[Triangle]>, given: &[&str]) -> WideBvh<W> {
+    let width = format!("bvh4.width={W}");
+    let params = Params::parse(given.iter().copied().chain([width.as_str()])).expect("parses");
     let bvh = WideBvh::<W>::build(&BuildInput { scene, triangles, params: &params }).expect("bvh4 builds");
     bvh.validate().unwrap_or_else(|e| panic!("{}: invalid {W}-wide bvh4: {e}", scene.name));
     bvh
@@ -178,6 +184,32 @@ fn check_scene(name: &str) {
     assert!(hits_of(&four) == hits_of(&eight), "{name}: the 8-wide tree's hits differ from the 4-wide tree's");
 }
 
+/// Leaves chosen by the SAH with block costs (`bvh4.leaves=sah`): subtrees merged into fuller
+/// blocks (fewer blocks than the binary tree's own leaves fill, on every scene here), the tree
+/// still valid, exact against brute force and its SIMD path bit for bit its scalar one, at both
+/// widths.
+#[test]
+fn sah_leaves_fill_blocks_and_stay_exact() {
+    for name in ["teapot", "bunny", "city", "stadium"] {
+        let scene = scenes::load_scene(name).unwrap_or_else(|e| panic!("loading {name}: {e}"));
+        let triangles = scene.triangles();
+        let (rays, primary) = scene_rays(&scene, &triangles, name);
+        let own: Bvh4 = build_wide(&scene, triangles.clone());
+        let mut sah: Bvh4 = build_with(&scene, triangles.clone(), &["bvh4.leaves=sah"]);
+        assert!(
+            sah.blocks.len() < own.blocks.len(),
+            "{name}: {} blocks with SAH leaves, {} with the binary tree's",
+            sah.blocks.len(),
+            own.blocks.len()
+        );
+        assert_brute_force(&sah, &triangles, &rays, &format!("{name} leaves=sah"));
+        assert_simd_is_scalar(&mut sah, &primary, &format!("{name} leaves=sah primary"));
+        let mut sah8: Bvh8 = build_with(&scene, triangles.clone(), &["bvh4.leaves=sah"]);
+        assert_brute_force(&sah8, &triangles, &rays, &format!("{name} 8-wide leaves=sah"));
+        assert_simd_is_scalar(&mut sah8, &primary, &format!("{name} 8-wide leaves=sah primary"));
+    }
+}
+
 /// A width other than the builder's, or an instruction set the width's kernel lacks, is refused.
 #[test]
 fn widths_refuse_what_they_cannot_run() {
@@ -195,6 +227,7 @@ fn widths_refuse_what_they_cannot_run() {
     assert!(refused("8", &[]).is_some_and(|e| e.contains("bvh4.width")), "an 8-wide builder asked for 4");
     assert!(refused("8", &["bvh4.width=8", "simd=sse4"]).is_some_and(|e| e.contains("not implemented")));
     assert!(refused("4", &["bvh4.width=6"]).is_some_and(|e| e.contains("is not one of 4, 8")));
+    assert!(refused("4", &["bvh4.leaves=all"]).is_some_and(|e| e.contains("is not one of bvh2, sah")));
     if Isa::Avx2.available() {
         assert!(refused("8", &["bvh4.width=8", "simd=avx2"]).is_none());
     }
@@ -290,6 +323,8 @@ fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
         ("bvh4", &["simd=scalar"]),
         ("bvh4", &["bvh4.width=8"]),
         ("bvh4", &["bvh4.width=8", "simd=scalar"]),
+        ("bvh4", &["bvh4.leaves=sah"]),
+        ("bvh4", &["bvh4.width=8", "bvh4.leaves=sah"]),
         ("ug", &[]),
         ("ug", &["simd=scalar"]),
         ("rg", &[]),

@@ -5,7 +5,9 @@
 //!
 //! - [`layout`]: nodes with the 4 (128 bytes) or 8 (256 bytes) children's boxes side by side, and
 //!   160-byte blocks of four triangles copied from the soup in structure-of-arrays form;
-//! - [`build`]: the greedy collapse of the reference's own PLOC BVH2 (same tree, wider nodes);
+//! - [`build`]: the greedy collapse of the reference's own PLOC BVH2 (same tree, wider nodes), its
+//!   leaves kept, or with `bvh4.leaves=sah` subtrees merged into fuller 4-triangle blocks where the
+//!   SAH with Embree's block costs says so;
 //! - CPU kernel: `kernels::cpu::bvh4` — one traversal over either SIMD tests (4-lane SSE boxes,
 //!   or 8-lane AVX2 boxes, with 4-lane triangle blocks) or the shared scalar tests
 //!   (`simd=scalar`, the oracle), bit for bit the same hits;
@@ -39,6 +41,8 @@ pub struct WideBvh<const W: usize> {
     pub depth: usize,
     /// The instruction set the kernel runs (`simd`, resolved against this CPU).
     pub isa: Resolved,
+    /// How the leaves were chosen (`bvh4.leaves`).
+    pub leaves: build::Leaves,
 }
 
 /// The 4-wide BVH (SSE), the default.
@@ -99,6 +103,7 @@ impl<const W: usize> Structure for WideBvh<W> {
             "builder": format!("obvhs PLOC, collapsed to {W}-wide"),
             "preset": self.preset.name(),
             "width": W,
+            "leaves": self.leaves.name(),
             "depth": self.depth,
             "blocks": self.blocks.len(),
             "simd": self.isa.name(),
