@@ -8,11 +8,16 @@
 //! `[t_min, t_max]`, and `h`, the `t_max` above which a parent need not be pushed again. The
 //! stack holds `(parent, t_max)` indexed by scale.
 //!
+//! The three axes of `pos` and of the plane distances are one SSE register each (`Vec3A`): the
+//! same IEEE operations lane by lane as the scalar arithmetic of [`OctreeRay::plane_t`] (no fused
+//! multiply-add), so every `t` is that function's bit for bit, and ADVANCE and PUSH choose their
+//! axes with one comparison and a bit mask instead of three branches.
+//!
 //! POP finds the new scale from the highest bit that differs between the float bit patterns of
 //! the old and the advanced position (§6, Fig. 14): in `[1, 2)` the mantissa bit `s` of a
 //! coordinate is the child-slot bit of the cube at scale `s`.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
 use crate::Stats;
@@ -101,17 +106,12 @@ pub fn cast<L: CastNodes, S: Stats>(
 
     // Select the root's child the ray enters first: the upper half of an axis iff the ray has
     // not yet crossed its centre plane at t_min.
-    let mut idx = 0u32;
-    let mut pos = Vec3::ONE;
+    let (coef, bias) = (Vec3A::from(r.coef), Vec3A::from(r.bias));
+    // `OctreeRay::plane_t` in one register.
+    let plane_t = |p: Vec3A| p * coef - bias;
     let mut scale = S_MAX - 1;
     let mut scale_exp2 = 0.5f32;
-    let centre = r.plane_t(Vec3::splat(1.5));
-    for a in 0..3 {
-        if centre[a] > t_min {
-            idx ^= 1 << a;
-            pos[a] = 1.5;
-        }
-    }
+    let (mut idx, mut pos) = enter_child(plane_t(Vec3A::splat(1.5)), t_min, Vec3A::ONE, 0.5);
 
     // Every iteration PUSHes (at most S_MAX times in a row) or ADVANCEs, so bounding the advances
     // bounds the loop; the count is checked only where the ray already tests for its end.
@@ -128,31 +128,31 @@ pub fn cast<L: CastNodes, S: Stats>(
             }
         };
         // Distances to the current cube's exit planes (its lower faces in the mirrored frame).
-        let corner = r.plane_t(pos);
-        let tc_max = below(below(corner.x, corner.y), corner.z);
+        let corner = plane_t(pos);
+        let tc_max = corner.min_element();
         let slot = idx ^ r.mirror_mask;
 
         if nodes.valid(&d, slot) && t_min <= t_max {
             // LOD: the voxel is small enough for the pixel it covers.
             if options.lod_k > 0.0 && scale_exp2 <= tc_max * options.lod_k {
-                return Some(CastHit::at(t_min, parent, slot, pos, scale, r.mirror_mask));
+                return Some(CastHit::at(t_min, parent, slot, pos.into(), scale, r.mirror_mask));
             }
             // INTERSECT: the span inside this cube, narrowed by the voxel's contour.
             let mut tv_max = below(t_max, tc_max);
             let half = scale_exp2 * 0.5;
-            let centre = r.plane_t(pos + Vec3::splat(half));
+            let centre = plane_t(pos + Vec3A::splat(half));
             if options.contours
                 && let (Some(span_of), Some(contour)) = (contour_span, nodes.contour(parent, &d, slot))
             {
                 stats.prim_test();
-                let (cube_min, size) = world_cube(pos, scale_exp2, r.mirror_mask);
+                let (cube_min, size) = world_cube(pos.into(), scale_exp2, r.mirror_mask);
                 let (lo, hi) = span_of(contour, cube_min, size, ray);
                 t_min = above(t_min, lo);
                 tv_max = below(tv_max, hi);
             }
             if t_min <= tv_max {
                 if nodes.leaf(&d, slot, scale) {
-                    return Some(CastHit::at(t_min, parent, slot, pos, scale, r.mirror_mask));
+                    return Some(CastHit::at(t_min, parent, slot, pos.into(), scale, r.mirror_mask));
                 }
                 // PUSH
                 if tc_max < h {
@@ -162,22 +162,20 @@ pub fn cast<L: CastNodes, S: Stats>(
                 h = tc_max;
                 parent = nodes.child(parent, &d, slot, scale);
                 desc = None;
-                idx = 0;
                 scale -= 1;
                 scale_exp2 = half;
-                for a in 0..3 {
-                    if centre[a] > t_min {
-                        idx ^= 1 << a;
-                        pos[a] += half;
-                    }
-                }
+                (idx, pos) = enter_child(centre, t_min, pos, half);
                 t_max = tv_max;
                 continue;
             }
         }
 
         // ADVANCE: step to the next cube of the same scale through the exit plane(s).
-        let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
+        // One comparison picks the axes whose exit plane is crossed first (several through an
+        // edge or corner); `advance` lane by lane (subtracting zero elsewhere leaves `pos` as is).
+        let crossed = corner.cmple(Vec3A::splat(tc_max));
+        let step_mask = crossed.bitmask();
+        pos -= Vec3A::select(crossed, Vec3A::splat(scale_exp2), Vec3A::ZERO);
         t_min = tc_max;
         idx ^= step_mask;
         advances += 1;
@@ -190,10 +188,11 @@ pub fn cast<L: CastNodes, S: Stats>(
 
         // POP if a flipped bit went against the ray: the ray left the parent.
         if idx & step_mask != 0 {
+            let mut corner_at = pos.to_array();
             let mut differing = 0u32;
             for a in 0..3 {
                 if step_mask >> a & 1 == 1 {
-                    differing |= pos[a].to_bits() ^ (pos[a] + scale_exp2).to_bits();
+                    differing |= corner_at[a].to_bits() ^ (corner_at[a] + scale_exp2).to_bits();
                 }
             }
             scale = 31 - differing.leading_zeros();
@@ -206,15 +205,26 @@ pub fn cast<L: CastNodes, S: Stats>(
             t_max = tm;
             stats.pop();
             idx = 0;
-            for a in 0..3 {
-                let sh = pos[a].to_bits() >> scale;
-                pos[a] = f32::from_bits(sh << scale);
+            for (a, x) in corner_at.iter_mut().enumerate() {
+                let sh = x.to_bits() >> scale;
+                *x = f32::from_bits(sh << scale);
                 idx |= (sh & 1) << a;
             }
+            pos = Vec3A::from_array(corner_at);
             h = 0.0;
             desc = None;
         }
     }
+}
+
+/// The child a ray enters first on descending into the cube at `pos` (mirrored frame) whose
+/// halves meet at the planes `centre` (their distances): the upper half of every axis whose
+/// centre plane the ray has not crossed by `t_min`. Returns the child's slot and minimum corner
+/// (`pos` moved up by `half` on those axes; adding zero leaves the others as they are).
+#[inline(always)]
+fn enter_child(centre: Vec3A, t_min: f32, pos: Vec3A, half: f32) -> (u32, Vec3A) {
+    let upper = centre.cmpgt(Vec3A::splat(t_min));
+    (upper.bitmask(), pos + Vec3A::select(upper, Vec3A::splat(half), Vec3A::ZERO))
 }
 
 /// `b` if it is below `a`, else `a` (one `minss`): `a.min(b)` wherever `a` is not NaN, which
