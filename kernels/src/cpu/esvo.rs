@@ -66,7 +66,10 @@ impl CastNodes for Descriptors<'_> {
 }
 
 /// The `t` span in which the octree-space `ray` lies between the contour's two planes, for the
-/// voxel cube `[cube_min, cube_min + size]³` (seed 000 §5.2).
+/// voxel cube `[cube_min, cube_min + size]³` (seed 000 §5.2). Inlined into the caster's loop:
+/// a call there makes the loop save and restore every live vector register around it (all of
+/// them are caller-saved), which cost more than the test itself.
+#[inline(always)]
 fn contour_span(contour: u32, cube_min: Vec3, size: f32, ray: &Ray) -> (f32, f32) {
     let (n, lo, hi) = Contour(contour).slab(cube_min, size);
     let along = n.dot(ray.dir);

@@ -68,6 +68,7 @@ pub struct Contour(pub u32);
 const _: () = assert!(size_of::<Contour>() == 4);
 
 /// Reads a signed two's complement field of `bits` bits at `shift`.
+#[inline(always)]
 fn signed_field(word: u32, shift: u32, bits: u32) -> i32 {
     let raw = (word >> shift) & ((1 << bits) - 1);
     ((raw << (32 - bits)) as i32) >> (32 - bits)
@@ -106,6 +107,7 @@ impl Contour {
     }
 
     /// The integer normal `(nx, ny, nz)`.
+    #[inline(always)]
     pub fn normal(&self) -> [i32; 3] {
         [
             signed_field(self.0, NX_SHIFT, NORMAL_BITS),
@@ -115,11 +117,13 @@ impl Contour {
     }
 
     /// The slab centre `P`, in steps of [`CPOS`].
+    #[inline(always)]
     pub fn position(&self) -> i32 {
         signed_field(self.0, POSITION_SHIFT, POSITION_BITS)
     }
 
     /// The slab half-thickness `T`, in steps of [`CHALF`].
+    #[inline(always)]
     pub fn thickness(&self) -> u32 {
         self.0 >> THICKNESS_SHIFT
     }
@@ -127,6 +131,7 @@ impl Contour {
     /// The slab as the ray caster uses it, for the cube with minimum corner `lo` and side `s`:
     /// `(N, dlo, dhi)` with the slab being `dlo ≤ N·x ≤ dhi`, `N = n / s`. Evaluated in f32,
     /// exactly as a kernel would.
+    #[inline(always)]
     pub fn slab(&self, lo: Vec3, s: f32) -> (Vec3, f32, f32) {
         let [nx, ny, nz] = self.normal();
         // `s` is a power of two, so multiplying by its reciprocal is exact: the same N as `n / s`
