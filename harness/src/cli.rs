@@ -100,8 +100,9 @@ pub enum Preset {
     /// against the kd-tree.
     OrgTable1,
     /// ORG as the paper builds it beside the fastest ORG configuration found (issue 16: a coarse
-    /// top grid, λ = 1/8, fine sub-grids, λ = 2, exact triangle/cell lists), the reference BVH and
-    /// Embree, on bunny, dragon-48k, city, terrain and the dragon at 1024×1024 on all cores.
+    /// top grid, λ = 1/8, fine sub-grids, λ = 2, exact triangle/cell lists), the reference BVH,
+    /// the wide BVH (4-wide SIMD and scalar, 8-wide) and Embree (fast and watertight), on bunny,
+    /// dragon-48k, city, terrain and the dragon at 1024×1024 on all cores.
     OrgFast,
     /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
     /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
