@@ -41,7 +41,7 @@ impl CastNodes for SvoNodes<'_> {
     }
     #[inline(always)]
     fn child(&self, _node: u32, desc: &[u32; 2], slot: u32, _scale: u32) -> u32 {
-        desc[1] + (desc[0] & ((1 << slot) - 1)).count_ones()
+        desc[1] + structures::voxel::morton::rank(desc[0], slot)
     }
 }
 

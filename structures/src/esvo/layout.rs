@@ -94,11 +94,7 @@ pub fn descriptor_w0(child_ptr: u32, far: bool, valid: u32, leaf: u32) -> u32 {
     (child_ptr << CHILD_PTR_SHIFT) | if far { FAR_BIT } else { 0 } | (valid << VALID_SHIFT) | (leaf << LEAF_SHIFT)
 }
 
-/// Index among `mask`'s set bits of bit `slot` (the paper's `popc8(mask & (bit − 1))`).
-#[inline(always)]
-pub fn rank(mask: u32, slot: u32) -> u32 {
-    (mask & ((1 << slot) - 1)).count_ones()
-}
+pub use crate::voxel::morton::rank;
 
 /// The page header slot of descriptor slot `slot`: clear the low bits of its address (§5.1).
 #[inline(always)]

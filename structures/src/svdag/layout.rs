@@ -70,7 +70,7 @@ impl Leaves {
 /// Word index of the pointer to child `slot` of the interior node at `node` with mask `mask`.
 #[inline(always)]
 pub fn pointer_index(node: u32, mask: u32, slot: u32) -> u32 {
-    node + 1 + (mask & ((1 << slot) - 1)).count_ones()
+    node + 1 + crate::voxel::morton::rank(mask, slot)
 }
 
 /// Words of a node at a level with these properties, from its first word.
