@@ -190,9 +190,9 @@ pub fn cast<L: CastNodes, S: Stats>(
         if idx & step_mask != 0 {
             let mut corner_at = pos.to_array();
             let mut differing = 0u32;
-            for a in 0..3 {
+            for (a, &x) in corner_at.iter().enumerate() {
                 if step_mask >> a & 1 == 1 {
-                    differing |= corner_at[a].to_bits() ^ (corner_at[a] + scale_exp2).to_bits();
+                    differing |= x.to_bits() ^ (x + scale_exp2).to_bits();
                 }
             }
             scale = 31 - differing.leading_zeros();
