@@ -171,11 +171,7 @@ pub fn cast<L: CastNodes, S: Stats>(
         }
 
         // ADVANCE: step to the next cube of the same scale through the exit plane(s).
-        // One comparison picks the axes whose exit plane is crossed first (several through an
-        // edge or corner); `advance` lane by lane (subtracting zero elsewhere leaves `pos` as is).
-        let crossed = corner.cmple(Vec3A::splat(tc_max));
-        let step_mask = crossed.bitmask();
-        pos -= Vec3A::select(crossed, Vec3A::splat(scale_exp2), Vec3A::ZERO);
+        let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;
         advances += 1;
@@ -270,16 +266,12 @@ pub fn world_cube(pos: Vec3, size: f32, mirror_mask: u32) -> (Vec3, f32) {
 /// ADVANCE (Fig. 15 lines 28–30): moves the mirrored cube at `pos` (side `size`) one cube down
 /// every axis whose exit plane is crossed first (`corner` holds the exit distances, `tc_max`
 /// their minimum; ties step several axes, through an edge or corner). Returns the stepped axes.
+/// One comparison picks the axes; subtracting zero on the others leaves them as they are.
 #[inline(always)]
-pub fn advance(pos: &mut Vec3, corner: Vec3, tc_max: f32, size: f32) -> u32 {
-    let mut step_mask = 0u32;
-    for a in 0..3 {
-        if corner[a] <= tc_max {
-            step_mask ^= 1 << a;
-            pos[a] -= size;
-        }
-    }
-    step_mask
+pub fn advance(pos: &mut Vec3A, corner: Vec3A, tc_max: f32, size: f32) -> u32 {
+    let crossed = corner.cmple(Vec3A::splat(tc_max));
+    *pos -= Vec3A::select(crossed, Vec3A::splat(size), Vec3A::ZERO);
+    crossed.bitmask()
 }
 
 impl<N> CastHit<N> {

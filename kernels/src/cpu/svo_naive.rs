@@ -78,7 +78,9 @@ fn trace<S: Stats>(svo: &SvoNaive, ray: &Ray, t_min: f32, t_max: f32, stats: &mu
             continue;
         }
         // ADVANCE
-        let step_mask = advance(&mut pos, corner, tc_max, size);
+        let mut moved = pos.into();
+        let step_mask = advance(&mut moved, corner.into(), tc_max, size);
+        pos = moved.into();
         t_min = tc_max;
         // In the mirrored frame the ray moves to lower halves: a step that sets a bit left the block.
         idx ^= step_mask;
