@@ -309,6 +309,24 @@ fn occupied(grid: &Grid, h: &GridHeader, index: u32) -> bool {
     grid.bricks[(h.first_brick + index / 32) as usize] & (1 << (index % 32)) != 0
 }
 
+/// Whether cell `index` of grid `h` lists nothing.
+#[inline(always)]
+fn cell_is_empty(grid: &Grid, h: &GridHeader, index: u32) -> bool {
+    let cell = (h.first_cell + index) as usize;
+    grid.cells[cell] == grid.cells[cell + 1]
+}
+
+/// Counts one more step against [`crate::MAX_STEPS`]; past it, records the bound and says so.
+#[inline(always)]
+fn over_bound<S: Stats>(guard: &mut u32, stats: &mut S) -> bool {
+    *guard += 1;
+    if *guard > crate::MAX_STEPS {
+        stats.at_bound();
+        return true;
+    }
+    false
+}
+
 /// The hierarchical DDA, testing each visited cell's triangles with `tris`.
 #[inline(always)]
 fn walk<T: TriangleLanes, S: Stats>(
@@ -334,9 +352,7 @@ fn walk<T: TriangleLanes, S: Stats>(
     let mut h = top;
     let mut guard = 0u32;
     'traverse: loop {
-        guard += 1;
-        if guard > crate::MAX_STEPS {
-            stats.at_bound();
+        if over_bound(&mut guard, stats) {
             return None;
         }
         stats.step();
@@ -380,9 +396,10 @@ fn walk<T: TriangleLanes, S: Stats>(
                 cull_t = cull_bound(best_t);
             }
         }
-        // ADVANCE within this DDA, stepping over empty bricks without leaving this loop (each
-        // a step, as it is when the loop above takes it), until the early exit — the best hit
-        // lies in the cells visited so far (see `HIT_MARGIN`) — or the DDA's end.
+        // ADVANCE within this DDA, stepping over empty bricks and empty cells without leaving
+        // this loop (each a step, and a cell a visit, as when the loop above takes it), until
+        // the early exit — the best hit lies in the cells visited so far (see `HIT_MARGIN`) —
+        // or the DDA's end.
         let mut crossing = cur.crossing();
         loop {
             if cull_t < crossing.1 {
@@ -391,20 +408,16 @@ fn walk<T: TriangleLanes, S: Stats>(
             if !dda.advance(h, &mut cur, crossing) {
                 break;
             }
-            let empty_cell = cur.shift == 0 && {
-                let cell = (h.first_cell + cur.index) as usize;
-                grid.cells[cell] == grid.cells[cell + 1]
-            };
-            if !empty_cell && (cur.shift == 0 || occupied(grid, h, cur.index)) {
+            let is_cell = cur.shift == 0;
+            let empty = if is_cell { cell_is_empty(grid, h, cur.index) } else { !occupied(grid, h, cur.index) };
+            if !empty {
                 continue 'traverse;
             }
-            guard += 1;
-            if guard > crate::MAX_STEPS {
-                stats.at_bound();
+            if over_bound(&mut guard, stats) {
                 return None;
             }
             stats.step();
-            if empty_cell {
+            if is_cell {
                 stats.visit();
             }
             crossing = cur.crossing();
