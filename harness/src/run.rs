@@ -14,6 +14,7 @@ use kernels::{Accel, StructureEntry};
 use reports::{
     AnimationRender, BuildStats, Case, MemoryStats, RenderStats, Results, Settings, SkippedCase, SkippedRender, Timing,
 };
+use scenes::error::bounded_text;
 use scenes::{Camera, Scene, Triangle};
 use structures::{BuildInput, Params};
 
@@ -151,19 +152,27 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     );
     let skipped = &out.results.skipped;
     if !skipped.is_empty() {
-        eprintln!("accel-bench: {} cases did not run:", skipped.len());
-        for k in skipped {
+        let count: usize = skipped.iter().map(|k| k.cases).sum();
+        eprintln!("accel-bench: {count} cases did not run:");
+        for k in skipped.iter().take(LISTED_SKIPS) {
             eprintln!("  {} {} [{}]: {}", k.scene, k.structure, k.kind, k.reason);
+        }
+        if skipped.len() > LISTED_SKIPS {
+            eprintln!("  … and {} more (results.json's `skipped` and the report list every one)", skipped.len() - LISTED_SKIPS);
         }
     }
     // Budget refusals are the run working as asked, and a structure this machine lacks (Embree)
     // is not the run's failure; anything else is a failure to report.
-    let failed = skipped.iter().filter(|k| k.kind != "budget" && k.kind != "unavailable").count();
+    let failed: usize = skipped.iter().filter(|k| k.kind != "budget" && k.kind != "unavailable").map(|k| k.cases).sum();
     if failed > 0 {
         bail!("{failed} cases failed (listed above, in results.json's `skipped` and in the report)");
     }
     Ok(())
 }
+
+/// How many cases that did not run the run's last lines list on stderr (each also printed as it
+/// was skipped, and all of them in results.json and the report).
+const LISTED_SKIPS: usize = 20;
 
 /// Names in first-seen order, each once.
 fn union<'a>(names: impl Iterator<Item = &'a String>) -> Vec<String> {
@@ -220,12 +229,14 @@ impl Matrix<'_> {
                 Ok(scene) => scene,
                 Err(e) => {
                     let kind = if e.downcast_ref::<BudgetError>().is_some() { "budget" } else { "scene" };
-                    let reason = format!("{e:#}");
+                    let reason = bounded_text(&format!("{e:#}"));
                     bar.suspend(|| eprintln!("  {scene_name}: skipped ({} cases): {reason}", matrix.len()));
-                    for (structure, _, variant) in matrix {
-                        self.skip(scene_name, structure, variant, kind, &reason)?;
-                        bar.inc(1);
-                    }
+                    // Once for the scene, not once per structure.
+                    let mut k = skipped(scene_name, "*", None, kind, &reason);
+                    k.cases = matrix.len();
+                    k.part = self.part.map(String::from);
+                    self.out.push_skipped(k)?;
+                    bar.inc(matrix.len() as u64);
                     continue;
                 }
             };
@@ -271,12 +282,12 @@ impl Matrix<'_> {
                     }
                     Ok(Err(e)) => {
                         let kind = failure_kind(&e);
-                        let reason = format!("{e:#}");
+                        let reason = bounded_text(&format!("{e:#}"));
                         bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
                         self.skip(scene_name, structure, variant, kind, &reason)?;
                     }
                     Err(panic) => {
-                        let reason = format!("panicked: {}", panic_message(panic.as_ref()));
+                        let reason = bounded_text(&format!("panicked: {}", panic_message(panic.as_ref())));
                         bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
                         self.skip(scene_name, structure, variant, "panic", &reason)?;
                     }
@@ -348,8 +359,8 @@ fn skipped(scene: &str, structure: &str, variant: Option<String>, kind: &str, re
         structure: structure.into(),
         variant,
         kind: kind.into(),
-        reason: reason.into(),
-        part: None,
+        reason: bounded_text(reason),
+        ..SkippedCase::default()
     }
 }
 
@@ -574,6 +585,7 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
                 match gpu::measure(gpu, accel.as_ref(), &camera, workload, plan, &cpu_frame)? {
                     gpu::Outcome::Row(stats) => case.render.push(*stats),
                     gpu::Outcome::Skipped(reason) => {
+                        let reason = bounded_text(&reason);
                         bar.suspend(|| {
                             eprintln!("  {}/{structure}: gpu {}: skipped, {reason}", scene.name, workload.name())
                         });

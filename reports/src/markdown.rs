@@ -9,6 +9,11 @@ use crate::references;
 use crate::scaling::{self, Axis};
 use crate::schema::{Agreement, Case, Results};
 
+/// "s" after a count other than one.
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
 /// The cases that did not run (budget refusals, scenes that did not load, failed builds) and the
 /// renders whose rays reached the kernels' iteration bound; empty when there are none.
 pub fn not_run_section(results: &Results) -> String {
@@ -19,6 +24,7 @@ pub fn not_run_section(results: &Results) -> String {
         let _ = writeln!(out, "| scene | structure | kind | reason |\n|---|---|---|---|");
         for k in &results.skipped {
             let structure = match &k.variant {
+                _ if k.structure == "*" => format!("every structure ({} case{})", k.cases, plural(k.cases)),
                 Some(v) => format!("{} ({v})", k.structure),
                 None => k.structure.clone(),
             };

@@ -32,9 +32,10 @@ pub struct Results {
 }
 
 /// A case of the matrix that produced no measurement, and why.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkippedCase {
     pub scene: String,
+    /// The structure, or `*` for an entry standing for a scene's whole matrix (see `cases`).
     pub structure: String,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub variant: Option<String>,
@@ -45,6 +46,32 @@ pub struct SkippedCase {
     /// The part of a many-part run the case belongs to.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub part: Option<String>,
+    /// How many cases of the matrix this entry stands for: 1, or every case of a scene that did
+    /// not load (listed once for the scene, with structure `*`).
+    #[serde(skip_serializing_if = "is_one", default = "one")]
+    pub cases: usize,
+}
+
+impl Default for SkippedCase {
+    fn default() -> Self {
+        Self {
+            scene: String::new(),
+            structure: String::new(),
+            variant: None,
+            kind: String::new(),
+            reason: String::new(),
+            part: None,
+            cases: 1,
+        }
+    }
+}
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(n: &usize) -> bool {
+    *n == 1
 }
 
 /// One part of a many-part run: a preset run with its own settings inside the run.

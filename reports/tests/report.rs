@@ -183,7 +183,16 @@ fn cases_that_did_not_run_and_rays_at_the_bound_are_listed() {
         variant: None,
         kind: "budget".into(),
         reason: "scene 'grass-2000000000' needs about 476.8 GiB | more than the limit".into(),
-        part: None,
+        ..Default::default()
+    });
+    // A scene that did not load is one entry for its whole matrix.
+    results.skipped.push(reports::SkippedCase {
+        scene: "points.gltf".into(),
+        structure: "*".into(),
+        kind: "scene".into(),
+        reason: "points.gltf: no triangles".into(),
+        cases: 12,
+        ..Default::default()
     });
     results.cases[0].render[0].rays_at_bound = 7;
     let md = markdown::report(&results);
@@ -192,12 +201,16 @@ fn cases_that_did_not_run_and_rays_at_the_bound_are_listed() {
         md.contains("| grass-2000000000 | bvh | budget | scene 'grass-2000000000' needs about 476.8 GiB \\| more"),
         "{md}"
     );
+    assert!(md.contains("| points.gltf | every structure (12 cases) | scene | points.gltf: no triangles |"), "{md}");
     assert!(md.contains("## Rays ended at the iteration bound") && md.contains("| 7 |"), "{md}");
     let page = html::report(&results, &images(&results));
     assert!(page.contains("id=\"not-run\"") && page.contains("476.8 GiB"), "the HTML lists them too");
     // Both fields survive a round trip through results.json, and are absent when empty.
     let back: Results = serde_json::from_str(&serde_json::to_string(&results).expect("serialise")).expect("parse");
-    assert_eq!((back.skipped.len(), back.cases[0].render[0].rays_at_bound), (1, 7));
+    assert_eq!((back.skipped.len(), back.cases[0].render[0].rays_at_bound), (2, 7));
+    assert_eq!(back.skipped, results.skipped, "a scene's case count survives; one case's is left out as 1");
+    let text = serde_json::to_string(&results.skipped).expect("serialise");
+    assert_eq!(text.matches("\"cases\"").count(), 1, "{text}");
     let plain = serde_json::to_string(&fixture()).expect("serialise");
     assert!(!plain.contains("\"skipped\"") && !plain.contains("rays_at_bound"), "absent when empty");
 }

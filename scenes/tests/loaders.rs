@@ -472,7 +472,29 @@ fn gltf_without_triangles_is_empty() {
     json["meshes"][0]["primitives"][0]["mode"] = json!(1);
     let err = gltf_err(&gltf_text(json, &bin));
     assert!(matches!(err, SceneError::Empty { .. }), "{err}");
-    assert!(err.to_string().contains("mesh \"tri\" primitive 0 (Lines)"), "{err}");
+    assert!(err.to_string().contains("skipped 1 primitive (1 line): mesh \"tri\" primitive 0"), "{err}");
+}
+
+/// A file of many unusable primitives is refused in one line: counted by mode, the first few
+/// named, never each one (100,000 points once made a 13 MB message, repeated per structure).
+#[test]
+fn gltf_of_many_unusable_primitives_is_refused_in_one_bounded_line() {
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let point = json!({"attributes": {"POSITION": 0}, "mode": 0});
+    let line = json!({"attributes": {"POSITION": 0}, "mode": 3});
+    let mut primitives = vec![point; 99_000];
+    primitives.extend(std::iter::repeat_n(line, 1_000));
+    json["meshes"][0]["primitives"] = json!(primitives);
+    let err = gltf_err(&gltf_text(json, &bin));
+    let text = err.to_string();
+    assert!(matches!(err, SceneError::Empty { .. }), "{text}");
+    assert!(text.len() < 1_000 && !text.contains('\n'), "{} bytes: {text}", text.len());
+    assert!(
+        text.contains("skipped 100,000 primitives (99,000 points, 1,000 line strips): mesh \"tri\" primitive 0, \
+                       mesh \"tri\" primitive 1,"),
+        "{text}"
+    );
+    assert!(text.ends_with("mesh \"tri\" primitive 4 and 99,995 more"), "{text}");
 }
 
 /// Inputs the `gltf` crate would panic on, or read out of range, if passed through unchecked.

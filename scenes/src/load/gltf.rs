@@ -20,6 +20,7 @@
 //! Sparse accessors are rejected as Unsupported; a node reached twice (a cycle, or two
 //! parents, which glTF forbids) is Malformed.
 
+use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -27,7 +28,7 @@ use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 
-use crate::error::{Location, SceneError};
+use crate::error::{Location, SceneError, bounded_list, grouped};
 use crate::mesh::Mesh;
 
 /// Parses a `.gltf` (JSON) or `.glb` file. `base_dir` resolves external buffer files; data URIs
@@ -37,7 +38,8 @@ pub fn parse_gltf(path: &str, bytes: &[u8], base_dir: Option<&Path>) -> Result<M
     let buffers = load_buffers(path, &document, blob, base_dir)?;
     let name = Path::new(path).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let mut mesh = Mesh::new(name, provenance(path, &document));
-    let mut skipped = Vec::new();
+    // Keyed by (mesh, primitive): a mesh used by several nodes is listed once, in index order.
+    let mut skipped = BTreeMap::new();
     for (node, transform) in scene_nodes(path, &document)? {
         let Some(node_mesh) = node.mesh() else { continue };
         for primitive in node_mesh.primitives() {
@@ -45,22 +47,51 @@ pub fn parse_gltf(path: &str, bytes: &[u8], base_dir: Option<&Path>) -> Result<M
                 format!("{} primitive {}", named("mesh", node_mesh.name(), node_mesh.index()), primitive.index());
             match read_primitive(path, &label, &primitive, &buffers)? {
                 Some(part) => append(path, &mut mesh, &part, transform, &node)?,
-                None => skipped.push(format!("{label} ({:?})", primitive.mode())),
+                None => {
+                    skipped.insert((node_mesh.index(), primitive.index()), (label, primitive.mode()));
+                }
             }
         }
     }
     if mesh.indices.is_empty() {
-        // A mesh used by several nodes is listed once.
-        skipped.sort();
-        skipped.dedup();
         let detail = match skipped.is_empty() {
             true => "the scene has no triangle primitives".to_string(),
-            false => format!("the scene has no triangle primitives; skipped {}", skipped.join(", ")),
+            false => format!("the scene has no triangle primitives; skipped {}", skipped_summary(skipped.values())),
         };
         return Err(SceneError::Empty { path: path.into(), detail });
     }
     mesh.validate(path)?;
     Ok(mesh)
+}
+
+/// "100,000 primitives (99,000 points, 1,000 lines): mesh 0 primitive 0, … and 99,995 more": the
+/// count by mode, then the first few, so a file of many unusable primitives costs one line.
+fn skipped_summary<'a>(skipped: impl Iterator<Item = &'a (String, Mode)>) -> String {
+    // Counted in the spec's order of modes (their numeric values).
+    let mut by_mode: BTreeMap<u32, (Mode, u64)> = BTreeMap::new();
+    let mut labels = Vec::new();
+    for (label, mode) in skipped {
+        by_mode.entry(mode.as_gl_enum()).or_insert((*mode, 0)).1 += 1;
+        labels.push(label.as_str());
+    }
+    let counts: Vec<String> = by_mode.values().map(|&(mode, n)| mode_name(mode, n)).collect();
+    let total = grouped(labels.len() as u64);
+    let noun = if labels.len() == 1 { "primitive" } else { "primitives" };
+    format!("{total} {noun} ({}): {}", counts.join(", "), bounded_list(&labels))
+}
+
+/// A primitive mode's name in a count of `n` ("1 line strip", "3 line strips").
+fn mode_name(mode: Mode, n: u64) -> String {
+    let one = match mode {
+        Mode::Points => "point",
+        Mode::Lines => "line",
+        Mode::LineLoop => "line loop",
+        Mode::LineStrip => "line strip",
+        Mode::Triangles => "triangle list",
+        Mode::TriangleStrip => "triangle strip",
+        Mode::TriangleFan => "triangle fan",
+    };
+    format!("{} {one}{}", grouped(n), if n == 1 { "" } else { "s" })
 }
 
 fn named(kind: &str, name: Option<&str>, index: usize) -> String {
