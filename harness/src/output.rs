@@ -17,6 +17,8 @@ pub struct RunOutput {
     pub dir: PathBuf,
     pub results: Results,
     jsonl: File,
+    /// Held for the run's life: the OS releases it when the process ends, however it ends.
+    _lock: File,
     /// The images already shown, for report.html: each thumbnail is read and encoded once.
     images: ShotCache,
 }
@@ -29,11 +31,17 @@ impl RunOutput {
     /// Creates the run directory: `out` if given, else `results_dir/<run-id>` with
     /// `results_dir/latest` pointing at it.
     ///
-    /// A run never writes over another: `out` must not hold a run already (results.json or
-    /// cases.jsonl) unless `overwrite`, and two runs started in the same second get `<run-id>`, `<run-id>-2`, ….
+    /// A run never writes over another: the directory is locked for the run's life ([`lock_dir`]),
+    /// so a second run into it is refused while the first runs, `--overwrite` included; `out` must
+    /// not hold a finished run (results.json or cases.jsonl) unless `overwrite`; and two runs
+    /// started in the same second get `<run-id>`, `<run-id>-2`, ….
     pub fn create(out: Option<&Path>, overwrite: bool, results_dir: &Path, mut results: Results) -> Result<Self> {
+        let mut lock = None;
         let dir = match out {
             Some(dir) => {
+                fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+                // Locked before it is checked, so two runs started at once cannot both pass.
+                lock = Some(lock_dir(dir)?);
                 let held = ["results.json", "cases.jsonl"].iter().map(|f| dir.join(f)).find(|p| p.exists());
                 if let Some(existing) = held.filter(|_| !overwrite) {
                     anyhow::bail!(
@@ -62,6 +70,10 @@ impl RunOutput {
                 }
             }
         };
+        let lock = match lock {
+            Some(lock) => lock,
+            None => lock_dir(&dir)?,
+        };
         fs::create_dir_all(dir.join("images")).with_context(|| format!("creating {}", dir.display()))?;
         if out.is_none() {
             link_latest(results_dir, &results.run_id)?;
@@ -73,7 +85,7 @@ impl RunOutput {
             .truncate(true)
             .open(&jsonl_path)
             .with_context(|| format!("creating {}", jsonl_path.display()))?;
-        let mut run = Self { dir, results, jsonl, images: ShotCache::new() };
+        let mut run = Self { dir, results, jsonl, _lock: lock, images: ShotCache::new() };
         run.write_summary()?;
         Ok(run)
     }
@@ -270,10 +282,57 @@ pub fn read_results(path: &Path) -> Result<(PathBuf, Results)> {
     Ok((dir, results))
 }
 
+/// The file in a run directory whose OS lock marks the run that writes there.
+pub const LOCK_FILE: &str = "run.lock";
+
+/// Takes the exclusive OS lock on `dir`'s [`LOCK_FILE`] and writes this process's id into it; a
+/// directory another run holds is refused, naming that run's process. The lock is the kernel's,
+/// not the file's existence: it ends with the process that holds it, crashed or killed, so a
+/// lock file left behind never blocks a later run.
+fn lock_dir(dir: &Path) -> Result<File> {
+    let path = dir.join(LOCK_FILE);
+    let mut file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .with_context(|| format!("creating {}", path.display()))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(fs::TryLockError::WouldBlock) => {
+            // The holder writes its id just after locking; an empty file is a holder in between.
+            let holder = fs::read_to_string(&path).unwrap_or_default();
+            let holder = match holder.trim() {
+                "" => "another run".to_string(),
+                id => format!("another run (process {id})"),
+            };
+            anyhow::bail!(
+                "{} is in use: {holder} is writing there; wait for it to finish or choose another --out",
+                dir.display()
+            );
+        }
+        Err(fs::TryLockError::Error(e)) => return Err(e).with_context(|| format!("locking {}", path.display())),
+    }
+    file.set_len(0).with_context(|| format!("writing {}", path.display()))?;
+    writeln!(file, "{}", std::process::id()).with_context(|| format!("writing {}", path.display()))?;
+    Ok(file)
+}
+
+/// Replaces `path` with `bytes` through a temporary file and a rename, so the file is always
+/// whole; a write that fails (a full disk) removes the temporary file and leaves the old one.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension("tmp");
-    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+    // `report.md` and `report.html` each get their own (`with_extension` gave both `report.tmp`).
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    let written = fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display())).and_then(|()| {
+        fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+    });
+    if written.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    written
 }
 
 #[cfg(unix)]

@@ -158,7 +158,10 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
             eprintln!("  {} {} [{}]: {}", k.scene, k.structure, k.kind, k.reason);
         }
         if skipped.len() > LISTED_SKIPS {
-            eprintln!("  … and {} more (results.json's `skipped` and the report list every one)", skipped.len() - LISTED_SKIPS);
+            eprintln!(
+                "  … and {} more (results.json's `skipped` and the report list every one)",
+                skipped.len() - LISTED_SKIPS
+            );
         }
     }
     // Budget refusals are the run working as asked, and a structure this machine lacks (Embree)

@@ -292,6 +292,144 @@ fn a_killed_run_keeps_every_finished_case_and_a_second_run_cannot_overwrite_it()
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A run holds its directory for its whole life: a second run into it is refused while it runs,
+/// `--overwrite` included, naming the first run's process, and the first run's results are its
+/// own. (The old check — "does the folder hold results yet?" — let a second run in before the
+/// first had written anything, and `--overwrite` let one in at any time: both reported success
+/// and one's results were silently replaced.)
+#[test]
+#[cfg(unix)]
+fn a_running_run_keeps_its_directory_against_a_second_run() {
+    let dir = temp_dir("locked");
+    let run = dir.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let _turn = turn();
+    // Long enough (about 10 s) to be running still when the second run has made its machine
+    // record (about 1 s) and reaches the directory.
+    let first_args = [
+        "run",
+        "--scenes",
+        "teapot,bunny,dragon",
+        "--structures",
+        "bvh,org,svo,esvo",
+        "--levels",
+        "8",
+        "--width",
+        "256",
+        "--height",
+        "256",
+        "--reps",
+        "2",
+        "--warmup",
+        "0",
+        "--threads",
+        "2",
+        "--no-images",
+        "--out",
+        &out,
+    ];
+    let mut first = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(first_args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the harness starts");
+    let start = Instant::now();
+    while !run.join("cases.jsonl").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "the first run never started writing");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut args = run_args("teapot", "bvh", &out);
+    args.push("--overwrite");
+    let second = common::harness_in_turn(&args);
+    assert!(first.try_wait().expect("poll").is_none(), "the first run ended before the second was refused");
+    let text = stderr(&second);
+    assert!(!second.status.success(), "a second run was let in: {text}");
+    assert!(text.contains("is in use") && text.contains(&format!("process {}", first.id())), "{text}");
+    let first = first.wait_with_output().expect("the first run ends");
+    assert!(first.status.success(), "the first run failed");
+    let results = read_json(&run.join("results.json"));
+    let cases = results["cases"].as_array().expect("cases");
+    assert_eq!(cases.len(), 12, "the first run's cases, all of them");
+    assert_eq!(results["settings"]["scenes"], serde_json::json!(["teapot", "bunny", "dragon"]), "the first run's");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two runs started at the same moment into one new directory: exactly one runs, the other is
+/// refused, and the directory holds the one that ran.
+#[test]
+#[cfg(unix)]
+fn of_two_runs_started_at_once_into_one_directory_one_is_refused() {
+    let dir = temp_dir("race");
+    let run = dir.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let _turn = turn();
+    let spawn = |structure: &str| {
+        Command::new(env!("CARGO_BIN_EXE_harness"))
+            .args(run_args("teapot", structure, &out))
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("the harness starts")
+    };
+    let (a, b) = (spawn("bvh"), spawn("org"));
+    let (a, b) = (a.wait_with_output().expect("a ends"), b.wait_with_output().expect("b ends"));
+    let ran: Vec<&str> =
+        [(&a, "bvh"), (&b, "org")].iter().filter(|(o, _)| o.status.success()).map(|(_, s)| *s).collect();
+    assert_eq!(ran.len(), 1, "exactly one runs: a said {}, b said {}", stderr(&a), stderr(&b));
+    let refused = if a.status.success() { &b } else { &a };
+    let text = stderr(refused);
+    assert!(text.contains("is in use") || text.contains("already holds a run"), "{text}");
+    let results = read_json(&run.join("results.json"));
+    let structures: Vec<&str> =
+        results["cases"].as_array().expect("cases").iter().filter_map(|c| c["structure"].as_str()).collect();
+    assert_eq!(structures, ran, "the directory holds the run that ran");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run on a full disk stops with a clear error and leaves no temporary file behind. Needs a
+/// small tmpfs, which only a process allowed to mount can make; elsewhere the test says so and
+/// passes without checking.
+#[test]
+#[cfg(target_os = "linux")]
+fn a_full_disk_is_a_clear_error_and_leaves_no_temporary_file() {
+    let dir = temp_dir("full-disk");
+    let mount = dir.join("small");
+    std::fs::create_dir_all(&mount).expect("mkdir");
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=256k"])
+        .arg("tmpfs")
+        .arg(&mount)
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("skipped: cannot mount a small tmpfs here (needs root or CAP_SYS_ADMIN)");
+        let _ = std::fs::remove_dir_all(&dir);
+        return;
+    }
+    // Fill it to the last byte, then give back a few pages: the run starts and fails on a write.
+    let mut filler = std::fs::File::create(mount.join("filler")).expect("filler");
+    let chunk = [0u8; 4096];
+    while std::io::Write::write_all(&mut filler, &chunk).is_ok() {}
+    let full = filler.metadata().expect("size").len();
+    filler.set_len(full.saturating_sub(3 * 4096)).expect("free three pages");
+    drop(filler);
+    let run = mount.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let o = harness_within(&run_args("teapot,bunny", "bvh,org,esvo", &out), Duration::from_secs(120));
+    let listing: Vec<String> = std::fs::read_dir(&run)
+        .map(|d| d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default();
+    let _ = Command::new("umount").arg(&mount).status();
+    no_panic(&o);
+    let text = stderr(&o);
+    assert!(!o.status.success(), "a run that could not write its results succeeded: {text}");
+    assert!(text.contains("No space left on device") && text.contains("writing"), "{text}");
+    assert!(listing.iter().all(|f| !f.ends_with(".tmp")), "temporary files left: {listing:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A scene a billion units wide (within the ±2^40 supported): the voxel structures see the same
 /// cube as the BVH. With an absolute direction epsilon in octree space every component of every
 /// ray was clamped there and the voxel structures missed everything.

@@ -490,8 +490,10 @@ fn gltf_of_many_unusable_primitives_is_refused_in_one_bounded_line() {
     assert!(matches!(err, SceneError::Empty { .. }), "{text}");
     assert!(text.len() < 1_000 && !text.contains('\n'), "{} bytes: {text}", text.len());
     assert!(
-        text.contains("skipped 100,000 primitives (99,000 points, 1,000 line strips): mesh \"tri\" primitive 0, \
-                       mesh \"tri\" primitive 1,"),
+        text.contains(
+            "skipped 100,000 primitives (99,000 points, 1,000 line strips): mesh \"tri\" primitive 0, \
+                       mesh \"tri\" primitive 1,"
+        ),
         "{text}"
     );
     assert!(text.ends_with("mesh \"tri\" primitive 4 and 99,995 more"), "{text}");
