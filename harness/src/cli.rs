@@ -254,6 +254,13 @@ pub struct RunArgs {
     /// refuses to overwrite another).
     #[arg(long, requires = "out")]
     pub overwrite: bool,
+    /// Continue an interrupted run in its own directory: the cases it finished are kept, the rest
+    /// run, and the report covers all. Alone, it runs the recorded command again; with other
+    /// flags, they must give the recorded matrix. A different matrix, machine or commit is
+    /// refused with what differs; a case cut off mid-way twice (killed, out of memory) is
+    /// recorded as failed instead of run a third time.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "overwrite"])]
+    pub resume: Option<PathBuf>,
     /// Where run directories and the `latest` link go when --out is not given.
     #[arg(long, value_name = "DIR", default_value = "results")]
     pub results_dir: PathBuf,

@@ -12,12 +12,14 @@ mod merge;
 mod output;
 mod probes;
 mod render;
+mod resume;
 mod run;
 mod shadows;
 
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches};
 
 use cli::{Cli, Command, ListWhat};
 
@@ -26,11 +28,28 @@ use cli::{Cli, Command, ListWhat};
 static GLOBAL: alloc::CountingAlloc = alloc::CountingAlloc;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The options `run` was given on the command line (its subcommand's, or the top level's).
+    // (Their ids; `ids` also lists the group clap derives for `RunArgs`, which is not an option.)
+    let options: Vec<String> = Cli::command()
+        .find_subcommand("run")
+        .map(|run| run.get_arguments().map(|a| a.get_id().to_string()).collect())
+        .unwrap_or_default();
+    let given = |m: &clap::ArgMatches| -> Vec<String> {
+        m.ids()
+            .map(|id| id.as_str())
+            .filter(|id| options.iter().any(|o| o == id) && m.value_source(id) == Some(ValueSource::CommandLine))
+            .map(String::from)
+            .collect()
+    };
     let result = match cli.command {
-        None => run::run(&cli.run, command),
-        Some(Command::Run(args)) => run::run(&args, command),
+        None => run::resume_or_run(&cli.run, &given(&matches), command),
+        Some(Command::Run(args)) => {
+            let sub = matches.subcommand_matches("run").map(given).unwrap_or_default();
+            run::resume_or_run(&args, &sub, command)
+        }
         Some(Command::Compare(args)) => {
             // 0: no regression; 1: a regression or a missing case; 2: usage or I/O error (as clap's).
             return match compare::compare(&args) {

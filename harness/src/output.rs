@@ -13,10 +13,26 @@ use reports::html::{Shot, Shots};
 use reports::images;
 use reports::{Case, Results};
 
+/// A case's place in a run: its part (in a many-part run) and its index in that part's matrix
+/// ([`Case::index`]).
+pub type CaseKey = (Option<String>, u64);
+
+/// One line per case started, written before its work: a case started and not finished was cut
+/// off (the process killed, or out of memory), which `--resume` counts.
+pub const ATTEMPTS_FILE: &str = "attempts.jsonl";
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Attempt {
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    part: Option<String>,
+    index: u64,
+}
+
 pub struct RunOutput {
     pub dir: PathBuf,
     pub results: Results,
     jsonl: File,
+    attempts: File,
     /// Held for the run's life: the OS releases it when the process ends, however it ends.
     _lock: File,
     /// The images already shown, for report.html: each thumbnail is read and encoded once.
@@ -78,16 +94,20 @@ impl RunOutput {
         if out.is_none() {
             link_latest(results_dir, &results.run_id)?;
         }
-        let jsonl_path = dir.join("cases.jsonl");
-        let jsonl = OpenOptions::new()
-            .create(true)
-            .write(true)
-            .truncate(true)
-            .open(&jsonl_path)
-            .with_context(|| format!("creating {}", jsonl_path.display()))?;
-        let mut run = Self { dir, results, jsonl, _lock: lock, images: ShotCache::new() };
+        let jsonl = open_log(&dir.join("cases.jsonl"), true)?;
+        let attempts = open_log(&dir.join(ATTEMPTS_FILE), true)?;
+        let mut run = Self { dir, results, jsonl, attempts, _lock: lock, images: ShotCache::new() };
         run.write_summary()?;
         Ok(run)
+    }
+
+    /// Records that the case `key` starts, before any of its work.
+    pub fn start_case(&mut self, key: &CaseKey) -> Result<()> {
+        let mut line = serde_json::to_vec(&Attempt { part: key.0.clone(), index: key.1 })?;
+        line.push(b'\n');
+        self.attempts.write_all(&line).with_context(|| format!("writing {ATTEMPTS_FILE}"))?;
+        self.attempts.flush()?;
+        Ok(())
     }
 
     /// Where a case's images go: `images/`, or `images/<part>/` for a part of a many-part run
@@ -127,6 +147,102 @@ impl RunOutput {
     pub fn write_summary(&mut self) -> Result<()> {
         write_results(&self.dir, &self.results, &mut self.images)
     }
+}
+
+/// Opens a run's line log for appending; `fresh` empties it first.
+fn open_log(path: &Path, fresh: bool) -> Result<File> {
+    OpenOptions::new()
+        .create(true)
+        .append(!fresh)
+        .write(true)
+        .truncate(fresh)
+        .open(path)
+        .with_context(|| format!("opening {}", path.display()))
+}
+
+/// A run directory opened to be continued (`harness run --resume`): locked, with what the run
+/// recorded and how far it got.
+pub struct Interrupted {
+    pub dir: PathBuf,
+    lock: File,
+    /// The run's results.json.
+    pub recorded: Results,
+    /// The whole cases of cases.jsonl (each line a case; text after the last newline is the case
+    /// that was being written when the run stopped), each key once, in the order they finished.
+    pub finished: Vec<Case>,
+    /// How many times each case was started.
+    pub started: BTreeMap<CaseKey, u32>,
+}
+
+impl Interrupted {
+    pub fn open(dir: &Path) -> Result<Self> {
+        if !dir.join("results.json").is_file() {
+            anyhow::bail!("{} holds no run to resume (no results.json)", dir.display());
+        }
+        let lock = lock_dir(dir)?;
+        let (_, recorded) = read_results(dir)?;
+        let finished = whole_lines::<Case>(&dir.join("cases.jsonl"))?;
+        let mut seen = std::collections::BTreeSet::new();
+        let mut kept = Vec::new();
+        for case in finished {
+            let index = case.index.with_context(|| {
+                format!(
+                    "{}: case {} {} has no index (written by an older harness); this run cannot be resumed",
+                    dir.display(),
+                    case.scene,
+                    case.full_name()
+                )
+            })?;
+            if seen.insert((case.part.clone(), index)) {
+                kept.push(case);
+            }
+        }
+        let mut started = BTreeMap::new();
+        for a in whole_lines::<Attempt>(&dir.join(ATTEMPTS_FILE))? {
+            *started.entry((a.part, a.index)).or_insert(0) += 1;
+        }
+        Ok(Self { dir: dir.to_path_buf(), lock, recorded, finished: kept, started })
+    }
+
+    /// The finished cases' keys.
+    pub fn done(&self) -> std::collections::BTreeSet<CaseKey> {
+        self.finished.iter().filter_map(|c| Some((c.part.clone(), c.index?))).collect()
+    }
+
+    /// Goes on writing into the run's directory: `results` (the recorded run, its finished cases
+    /// in place) is written, cases.jsonl is rewritten with those cases alone (dropping a case cut
+    /// off while it was being written), and new cases and attempts are appended.
+    pub fn continue_with(self, results: Results) -> Result<RunOutput> {
+        let Self { dir, lock, .. } = self;
+        let mut lines = Vec::new();
+        for case in &results.cases {
+            lines.extend(serde_json::to_vec(case)?);
+            lines.push(b'\n');
+        }
+        write_atomic(&dir.join("cases.jsonl"), &lines)?;
+        let jsonl = open_log(&dir.join("cases.jsonl"), false)?;
+        let attempts = open_log(&dir.join(ATTEMPTS_FILE), false)?;
+        fs::create_dir_all(dir.join("images")).with_context(|| format!("creating {}", dir.display()))?;
+        let mut run = RunOutput { dir, results, jsonl, attempts, _lock: lock, images: ShotCache::new() };
+        run.write_summary()?;
+        Ok(run)
+    }
+}
+
+/// The records of a line log, one per newline-terminated line (a missing file holds none); the
+/// text after the last newline is a record cut off while it was written, and is left out.
+fn whole_lines<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    let text = match fs::read_to_string(path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    let whole = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+    whole
+        .lines()
+        .enumerate()
+        .map(|(i, line)| serde_json::from_str(line).with_context(|| format!("{}: line {}", path.display(), i + 1)))
+        .collect()
 }
 
 /// Writes `results.json`, `report.md` and `report.html` into `dir`. `cache` holds the thumbnails

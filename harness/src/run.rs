@@ -3,6 +3,7 @@
 //! a separate pass, check agreement with the reference, write images, and record the case. GPU
 //! rows (see [`crate::gpu`]) are checked against the same structure's CPU frame instead.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -25,13 +26,27 @@ use crate::cli::{Backend, PartPlan, Plan, RunArgs};
 use crate::gpu;
 use crate::images;
 use crate::machine;
-use crate::output::RunOutput;
+use crate::output::{CaseKey, Interrupted, RunOutput};
+use crate::resume;
 use crate::shadows;
 
 /// The structure every other one is checked against, and that is checked against brute force.
 const REFERENCE: &str = reports::compare::REFERENCE;
 
-pub fn run(args: &RunArgs, command: String) -> Result<()> {
+/// `harness run`: a new run, or with `--resume DIR` the interrupted run in DIR continued (with
+/// its recorded command's flags when `--resume` is the only option `given`).
+pub fn resume_or_run(args: &RunArgs, given: &[String], command: String) -> Result<()> {
+    let Some(dir) = &args.resume else { return run(args, command, None) };
+    let interrupted = Interrupted::open(dir)?;
+    let recorded = interrupted.recorded.settings.command.clone();
+    let args = match given.iter().all(|g| g == "resume") {
+        true => resume::recorded_args(&recorded, dir)?,
+        false => args.clone(),
+    };
+    run(&args, recorded, Some(interrupted))
+}
+
+fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<()> {
     check_optimised(args.allow_unoptimized)?;
     let parts = args.plans().map_err(|e| anyhow::anyhow!(e))?;
     // Only the user's own keys: a preset's (e.g. voxel.levels) are not the user's to misspell.
@@ -88,7 +103,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         top.structures = union(parts.iter().flat_map(|p| &p.plan.structures));
         top.params.clear();
     }
-    let results = Results {
+    let mut results = Results {
         schema: reports::SCHEMA.into(),
         run_id,
         created,
@@ -100,7 +115,26 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         parts: part_records,
         skipped: Vec::new(),
     };
-    let mut out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
+    let mut progress = Progress::default();
+    let mut out = match resumed {
+        None => RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?,
+        Some(interrupted) => {
+            let differs = resume::differences(&interrupted.recorded, &results);
+            if !differs.is_empty() {
+                bail!(
+                    "{} cannot be resumed by this run: {}",
+                    interrupted.dir.display(),
+                    scenes::error::bounded_list(&differs)
+                );
+            }
+            // The run's own record; its machine probes and start time are the first session's.
+            let recorded = &interrupted.recorded;
+            results = Results { cases: interrupted.finished.clone(), skipped: Vec::new(), ..recorded.clone() };
+            progress = Progress { done: interrupted.done(), started: interrupted.started.clone() };
+            eprintln!("accel-bench: resuming {}: {} cases kept", interrupted.dir.display(), results.cases.len());
+            interrupted.continue_with(results)?
+        }
+    };
     eprintln!("accel-bench: writing {}", out.dir.display());
     if many {
         let (scaled, full) = crate::cli::PAPER_MINUTES;
@@ -132,11 +166,22 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         if let Some(name) = name {
             bar.suspend(|| eprintln!("accel-bench: part {}/{}: {name} — {}", i + 1, prepared.len(), part.title));
         }
-        let mut matrix =
-            Matrix { plan: &part.plan, params, part: name, args, out: &mut out, bar: &bar, budget: &budget, gpu };
+        let earlier = if many { out.results.parts[i].wall_s } else { 0.0 };
+        let mut matrix = Matrix {
+            plan: &part.plan,
+            params,
+            part: name,
+            args,
+            out: &mut out,
+            bar: &bar,
+            budget: &budget,
+            gpu,
+            progress: &progress,
+        };
         matrix.run()?;
         if many {
-            out.results.parts[i].wall_s = t.elapsed().as_secs_f64();
+            // A resumed part's time is the sum of its sessions'.
+            out.results.parts[i].wall_s = earlier + t.elapsed().as_secs_f64();
             out.write_summary()?;
             bar.suspend(|| {
                 eprintln!("accel-bench: part {} took {:.1} min", part.name, t.elapsed().as_secs_f64() / 60.0)
@@ -199,7 +244,20 @@ struct Matrix<'a> {
     bar: &'a ProgressBar,
     budget: &'a Budget,
     gpu: Option<&'static GpuContext>,
+    /// What an interrupted run got through (empty for a new run).
+    progress: &'a Progress,
 }
+
+/// How far an interrupted run got: the cases it finished, and how often each was started.
+#[derive(Default)]
+struct Progress {
+    done: BTreeSet<CaseKey>,
+    started: BTreeMap<CaseKey, u32>,
+}
+
+/// A case cut off mid-way this many times (killed, out of memory) is recorded as failed rather
+/// than started again.
+const MAX_CUT_OFFS: u32 = 2;
 
 impl Matrix<'_> {
     fn run(&mut self) -> Result<()> {
@@ -218,12 +276,39 @@ impl Matrix<'_> {
 
     fn scenes(&mut self) -> Result<()> {
         let (plan, params, bar, budget) = (self.plan, self.params, self.bar, self.budget);
+        let part_name = self.part.map(String::from);
+        let mut index = 0u64;
         for scene_name in &plan.scenes {
-            let matrix: Vec<(&String, Params, Option<String>)> = plan
-                .structures
-                .iter()
-                .flat_map(|s| variants(plan, params, s).into_iter().map(move |(p, v)| (s, p, v)))
-                .collect();
+            let mut matrix: Vec<(&String, Params, Option<String>, u64)> = Vec::new();
+            for s in &plan.structures {
+                for (p, v) in variants(plan, params, s) {
+                    matrix.push((s, p, v, index));
+                    index += 1;
+                }
+            }
+            // An interrupted run's finished cases are kept; a case cut off mid-way too often is
+            // recorded as failed.
+            let mut pending = Vec::new();
+            for (structure, p, variant, i) in matrix {
+                let key = (part_name.clone(), i);
+                if self.progress.done.contains(&key) {
+                    bar.inc(1);
+                } else if self.progress.started.get(&key).copied().unwrap_or(0) >= MAX_CUT_OFFS {
+                    let reason = format!(
+                        "cut off mid-case {MAX_CUT_OFFS} times (the process was killed or ran out of memory); \
+                         not started again"
+                    );
+                    bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
+                    self.skip(scene_name, structure, variant, "error", &reason)?;
+                    bar.inc(1);
+                } else {
+                    pending.push((structure, p, variant, i));
+                }
+            }
+            let matrix = pending;
+            if matrix.is_empty() {
+                continue;
+            }
             bar.set_message(format!("{scene_name}: loading"));
             let t = Instant::now();
             let loaded = std::panic::catch_unwind(|| load_scene(scene_name, budget, plan.frames))
@@ -257,7 +342,8 @@ impl Matrix<'_> {
                 });
             }
             let mut ctx = SceneRun::new(&scene, load_ms, self.gpu);
-            for (structure, params, variant) in matrix {
+            for (structure, params, variant, i) in matrix {
+                self.out.start_case(&(part_name.clone(), i))?;
                 // One case's failure, a panic included, costs that case alone: it is listed with
                 // its reason and the matrix goes on.
                 let (args, out, part) = (self.args, &*self.out, self.part);
@@ -280,6 +366,7 @@ impl Matrix<'_> {
                 match attempt {
                     Ok(Ok(mut case)) => {
                         case.part = self.part.map(String::from);
+                        case.index = Some(i);
                         bar.suspend(|| eprintln!("{}", one_line(&case)));
                         self.out.push_case(case)?;
                     }
@@ -563,6 +650,7 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
         images: Vec::new(),
         machine: None,
         part: None,
+        index: None,
         skipped: Vec::new(),
         animation: Vec::new(),
         shadow: Vec::new(),

@@ -237,6 +237,11 @@ pub struct Case {
     /// The part of a many-part run (see [`Results::parts`]); `None` in a run of one preset.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub part: Option<String>,
+    /// The case's place in its run's matrix (its part's, in a many-part run), counted from 0
+    /// over scenes × structures × variants in the order the run takes them: what
+    /// `harness run --resume` matches the cases a run finished by. `None` in older results.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub index: Option<u64>,
     /// Renders of the matrix this case did not run, and why (a structure without a GPU kernel,
     /// a workload the GPU backend does not run).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
