@@ -86,7 +86,7 @@ pub enum Preset {
     /// small enough for CI, and timing ratios that do not depend on how many cores a shared runner
     /// leaves free (the baseline of `harness compare` in `.ci/run`).
     Ci,
-    /// Every built-in scene at 512×512, every structure.
+    /// Every built-in scene at 512×512, every structure: about 5 minutes on 2 cores.
     Default,
     /// Seed 002 Fig. 1: Eq. 1 (`ug`, λ = 1) against Algorithm 2 (`org`, one level) on grass,
     /// N = 1K…100K: pointers, build and render time, with fitted growth exponents.
@@ -390,7 +390,11 @@ pub struct Plan {
     pub height: u32,
     pub threads: usize,
     pub warmup: u32,
+    /// The most timed repetitions (exactly this many unless `adaptive`).
     pub reps: u32,
+    /// Timing stops once a case's median is known (see [`crate::reps`]): unless `--reps` was
+    /// given, or the preset is `ci` (its gate compares with a baseline of a fixed count).
+    pub adaptive: bool,
     /// Build repetitions: `warmup` and `reps` unless the preset times its builds fewer times.
     pub build_warmup: u32,
     pub build_reps: u32,
@@ -790,6 +794,7 @@ impl RunArgs {
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from)),
             warmup: self.warmup.or(preset.render_reps().map(|r| r.0)).unwrap_or(1),
             reps: self.reps.or(preset.render_reps().map(|r| r.1)).unwrap_or(5),
+            adaptive: self.reps.is_none() && preset != Preset::Ci,
             build_warmup: self.warmup.or(preset.build_reps(scaled).map(|b| b.0)).unwrap_or(1),
             build_reps: self.reps.or(preset.build_reps(scaled).map(|b| b.1)).unwrap_or(5),
             animation_reps: (

@@ -10,8 +10,10 @@ mod images;
 mod machine;
 mod merge;
 mod output;
+mod phases;
 mod probes;
 mod render;
+mod reps;
 mod resume;
 mod run;
 mod shadows;
@@ -62,8 +64,10 @@ fn main() -> ExitCode {
             };
         }
         Some(Command::Merge(args)) => merge::merge(&args, command),
-        Some(Command::Report { run }) => output::read_results(&run)
-            .and_then(|(dir, results)| output::write_results(&dir, &results, &mut Default::default())),
+        Some(Command::Report { run }) => output::read_results(&run).and_then(|(dir, results)| {
+            let results = output::with_logged_cases(&dir, results)?;
+            output::write_results(&dir, &results, &mut Default::default())
+        }),
         Some(Command::Render(args)) => render::render_images(&args),
         Some(Command::List { what }) => {
             list(what);

@@ -67,6 +67,7 @@ fn settings_differences(prefix: &str, a: &Settings, b: &Settings, out: &mut Vec<
         threads,
         warmup,
         reps,
+        adaptive_reps,
         build_profile,
         params,
     } = a;
@@ -80,6 +81,7 @@ fn settings_differences(prefix: &str, a: &Settings, b: &Settings, out: &mut Vec<
     differ(&format!("{prefix}threads"), threads, &b.threads, out);
     differ(&format!("{prefix}warmup"), warmup, &b.warmup, out);
     differ(&format!("{prefix}reps"), reps, &b.reps, out);
+    differ(&format!("{prefix}adaptive reps"), adaptive_reps, &b.adaptive_reps, out);
     differ(&format!("{prefix}build profile"), build_profile, &b.build_profile, out);
     differ(&format!("{prefix}params"), params, &b.params, out);
 }

@@ -27,6 +27,8 @@ use crate::gpu;
 use crate::images;
 use crate::machine;
 use crate::output::{CaseKey, Interrupted, RunOutput};
+use crate::phases::{self, Phase};
+use crate::reps;
 use crate::resume;
 use crate::shadows;
 
@@ -114,6 +116,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         merged: Vec::new(),
         parts: part_records,
         skipped: Vec::new(),
+        phases_s: Default::default(),
     };
     let mut progress = Progress::default();
     let mut out = match resumed {
@@ -155,8 +158,10 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         })
         .sum();
     let bar = ProgressBar::new(cases).with_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases  {wide_msg}")
-            .context("progress template")?,
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases, ~{eta} left at this pace  {wide_msg}",
+        )
+        .context("progress template")?,
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let started = Instant::now();
@@ -189,12 +194,11 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         }
     }
     bar.finish_and_clear();
-    eprintln!(
-        "accel-bench: {} cases in {:.1} s; results in {}",
-        out.results.cases.len(),
-        started.elapsed().as_secs_f64(),
-        out.dir.display()
-    );
+    let wall_s = started.elapsed().as_secs_f64();
+    out.results.phases_s = phases::snapshot(wall_s);
+    out.write_summary()?;
+    eprintln!("accel-bench: {} cases in {wall_s:.1} s; results in {}", out.results.cases.len(), out.dir.display());
+    eprintln!("accel-bench: {}", phases::summary(wall_s));
     let skipped = &out.results.skipped;
     if !skipped.is_empty() {
         let count: usize = skipped.iter().map(|k| k.cases).sum();
@@ -311,8 +315,10 @@ impl Matrix<'_> {
             }
             bar.set_message(format!("{scene_name}: loading"));
             let t = Instant::now();
-            let loaded = std::panic::catch_unwind(|| load_scene(scene_name, budget, plan.frames))
-                .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))));
+            let loaded = phases::time(Phase::Load, || {
+                std::panic::catch_unwind(|| load_scene(scene_name, budget, plan.frames))
+                    .unwrap_or_else(|panic| Err(anyhow::anyhow!("loading panicked: {}", panic_message(panic.as_ref()))))
+            });
             let scene = match loaded {
                 Ok(scene) => scene,
                 Err(e) => {
@@ -544,6 +550,7 @@ fn settings(plan: &Plan, params: &Params, command: String) -> Settings {
         threads: plan.threads,
         warmup: plan.warmup,
         reps: plan.reps,
+        adaptive_reps: plan.adaptive,
         build_profile: format!(
             "{} (opt-level {}, debug-assertions {})",
             env!("ACCEL_BENCH_PROFILE"),
@@ -574,11 +581,22 @@ struct SceneRun<'a> {
     reference_frame: Option<Frame>,
     /// The GPU backend's adapter, when the run uses it.
     gpu: Option<&'static GpuContext>,
+    /// The workloads rendered in this scene so far (by the reference among others): a
+    /// reference that rendered one needs no warm-up render for it.
+    warm: Vec<String>,
 }
 
 impl<'a> SceneRun<'a> {
     fn new(scene: &'a Scene, load_ms: f64, gpu: Option<&'static GpuContext>) -> Self {
-        Self { gpu, scene, triangles: scene.triangles(), load_ms, reference: None, reference_frame: None }
+        Self {
+            gpu,
+            scene,
+            triangles: scene.triangles(),
+            load_ms,
+            reference: None,
+            reference_frame: None,
+            warm: Vec::new(),
+        }
     }
 }
 
@@ -621,7 +639,7 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
     } else {
         if ctx.reference.is_none() {
             bar.set_message(format!("{}/{structure}: building the reference", scene.name));
-            ctx.reference = Some(build_reference(&input)?);
+            ctx.reference = Some(phases::time(Phase::UntimedBuilds, || build_reference(&input))?);
         }
         kernels::find_structure(REFERENCE)
     };
@@ -671,9 +689,13 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
                 let gpu = ctx.gpu.context("the GPU context is created before the matrix runs")?;
                 let cpu_frame = match cpu_primary.take() {
                     Some(frame) => frame,
-                    None => render::render(accel.as_ref(), &camera, &shade, Workload::Primary),
+                    None => {
+                        phases::time(Phase::Gpu, || render::render(accel.as_ref(), &camera, &shade, Workload::Primary))
+                    }
                 };
-                match gpu::measure(gpu, accel.as_ref(), &camera, workload, plan, &cpu_frame)? {
+                match phases::time(Phase::Gpu, || {
+                    gpu::measure(gpu, accel.as_ref(), &camera, workload, plan, &cpu_frame)
+                })? {
                     gpu::Outcome::Row(stats) => case.render.push(*stats),
                     gpu::Outcome::Skipped(reason) => {
                         let reason = bounded_text(&reason);
@@ -688,17 +710,22 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
             }
             let device = &out.results.machine.cpu;
             let reference = paired.and(ctx.reference.as_deref());
+            // The reference rendered this workload in this scene before (its own case, or an
+            // earlier paired one).
+            let reference_warm = ctx.warm.contains(&workload.name());
             // The render phase's heap peak (frames, counters, the reference's frame, images), beside
             // the frame budget's estimate of it.
             let base = alloc::reset_peak();
             let (mut stats, frame, heat) =
-                timed_renders(accel.as_ref(), reference, &camera, &shade, workload, plan, device);
+                timed_renders(accel.as_ref(), reference, reference_warm, &camera, &shade, workload, plan, device);
+            ctx.warm.push(workload.name());
             if stats.counts_steps() {
                 stats.steps_p99 = Some(reports::images::percentile_99(&heat));
             }
             if workload == Workload::Primary {
                 bar.set_message(format!("{}/{structure}: checking against the reference", scene.name));
-                stats.agreement = Some(check_agreement(ctx, structure, &frame, &camera, params)?);
+                stats.agreement =
+                    Some(phases::time(Phase::Agreement, || check_agreement(ctx, structure, &frame, &camera, params))?);
             }
             if !args.no_images {
                 // Voxel cases of a sweep differ in their resolution and variant.
@@ -720,7 +747,8 @@ fn measure_case(ctx: &mut SceneRun, run: CaseRun, bar: &ProgressBar, budget: &Bu
                 let post = |rgb: &[u8]| accel.post_filter(&camera, &frame, rgb);
                 let (dir, rel) = out.images_dir(part)?;
                 let what = images::CaseImages { frame: &frame, steps, reference };
-                case.images.extend(images::write_case_images(&dir, &rel, &stem, what, post)?);
+                case.images
+                    .extend(phases::time(Phase::Images, || images::write_case_images(&dir, &rel, &stem, what, post))?);
             }
             if workload == Workload::Primary {
                 if structure == REFERENCE && ctx.reference_frame.is_none() {
@@ -809,9 +837,14 @@ fn timed_builds(
     timed(reference.map(|r| || Ok((r.build)(input)?)), || Ok((entry.build)(input)?), plan)
 }
 
-/// Runs `build` `build_warmup + build_reps` times, each after one `reference` build (timed in
-/// alternation, so both see the same load); times the last reps and the heap peak; keeps the
-/// last result. What both [`timed_builds`] and a point-query structure's case time.
+/// Runs `build` up to `build_warmup + build_reps` times, each timed rep after one `reference`
+/// build (timed in alternation, so both see the same load); times the reps and the heap peak;
+/// keeps the last result. What both [`timed_builds`] and a point-query structure's case time.
+///
+/// Warm-ups: the reference takes none (it was built, untimed, for the scene before any paired
+/// case), and a warm-up build of [`LONG_BUILD_MS`] or more is kept as the first timed rep, paired
+/// with a reference build right after it: the one-time costs a warm-up absorbs (code and data
+/// first touched, the allocator's growth) are well under 1 % of a build that long.
 pub(crate) fn timed<T, R>(
     mut reference: Option<impl FnMut() -> Result<R>>,
     mut build: impl FnMut() -> Result<T>,
@@ -821,24 +854,33 @@ pub(crate) fn timed<T, R>(
     let mut reference_samples = Vec::new();
     let mut peak = 0usize;
     let mut built: Option<T> = None;
-    for i in 0..plan.build_warmup + plan.build_reps {
+    let mut warm_ups = plan.build_warmup;
+    while (samples.len() as u32) < plan.build_reps {
+        if plan.adaptive && reps::settled(&samples, &reference_samples) {
+            break;
+        }
         drop(built.take());
-        if let Some(reference) = reference.as_mut() {
-            let t = Instant::now();
-            drop(reference()?);
-            if i >= plan.build_warmup {
-                reference_samples.push(ms_since(t));
-            }
+        let warm_up = warm_ups > 0;
+        if !warm_up {
+            timed_reference(reference.as_mut(), &mut reference_samples)?;
         }
         let base = alloc::reset_peak();
         let t = Instant::now();
         let s = build()?;
         let ms = ms_since(t);
         peak = peak.max(alloc::peak_bytes().saturating_sub(base));
-        if i >= plan.build_warmup {
-            samples.push(ms);
-        }
         built = Some(s);
+        if warm_up && ms < LONG_BUILD_MS {
+            warm_ups -= 1;
+            phases::add_ms(Phase::UntimedBuilds, ms);
+            continue;
+        }
+        if warm_up {
+            warm_ups = 0;
+            timed_reference(reference.as_mut(), &mut reference_samples)?;
+        }
+        phases::add_ms(Phase::TimedBuilds, ms);
+        samples.push(ms);
     }
     let built = built.context("no build ran")?;
     let build = BuildStats {
@@ -850,11 +892,28 @@ pub(crate) fn timed<T, R>(
     Ok((built, build))
 }
 
+/// One timed reference build, if there is a reference.
+fn timed_reference<R>(reference: Option<&mut impl FnMut() -> Result<R>>, samples: &mut Vec<f64>) -> Result<()> {
+    if let Some(reference) = reference {
+        let t = Instant::now();
+        drop(reference()?);
+        let ms = ms_since(t);
+        phases::add_ms(Phase::TimedBuilds, ms);
+        samples.push(ms);
+    }
+    Ok(())
+}
+
+/// A warm-up build at least this long is kept as a timed rep (see [`timed`]).
+const LONG_BUILD_MS: f64 = 250.0;
+
 /// Renders `warmup + reps` times without counters (timed), then once with counters. With a
 /// `reference`, each rep first renders (and times) the same rays through the reference.
+#[allow(clippy::too_many_arguments)] // the renders' inputs, each needed
 fn timed_renders(
     accel: &dyn Accel,
     reference: Option<&dyn Accel>,
+    reference_warm: bool,
     camera: &Camera,
     shade: &ShadeContext,
     workload: Workload,
@@ -868,22 +927,31 @@ fn timed_renders(
     let mut own = Frame::new(camera.width, camera.height);
     let mut reference_frame = reference.map(|_| Frame::new(camera.width, camera.height));
     for i in 0..plan.warmup + plan.reps {
-        if let (Some(reference), Some(f)) = (reference, reference_frame.as_mut()) {
+        if plan.adaptive && reps::settled(&samples, &reference_samples) {
+            break;
+        }
+        let phase = if i >= plan.warmup { Phase::TimedRenders } else { Phase::UntimedRenders };
+        // A reference that has rendered these rays in this scene before is warm already.
+        let skip_reference = i < plan.warmup && reference_warm;
+        if let (Some(reference), Some(f), false) = (reference, reference_frame.as_mut(), skip_reference) {
             let t = Instant::now();
             render::render_into(reference, camera, shade, workload, f);
+            let ms = ms_since(t);
+            phases::add_ms(phase, ms);
             if i >= plan.warmup {
-                reference_samples.push(ms_since(t));
+                reference_samples.push(ms);
             }
         }
         let t = Instant::now();
         render::render_into(accel, camera, shade, workload, &mut own);
         let ms = ms_since(t);
+        phases::add_ms(phase, ms);
         if i >= plan.warmup {
             samples.push(ms);
         }
     }
     let frame = (plan.warmup + plan.reps > 0).then_some(own);
-    let (counted, counters) = render::render_counted(accel, camera, shade, workload);
+    let (counted, counters) = phases::time(Phase::Counting, || render::render_counted(accel, camera, shade, workload));
     let frame = frame.unwrap_or_else(|| counted.clone());
     let totals = counters.total();
     let rays = counted.rays as f64;

@@ -351,3 +351,54 @@ fn merge_tags_each_machines_cases() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--tag"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Without `--reps`, each build and render series takes 3 to 5 timed reps (stopping once its
+/// median is known) and records its interval; `--reps N` takes exactly N. Either way the run
+/// records where its time went.
+#[test]
+fn repetitions_adapt_unless_a_count_is_given() {
+    let out = temp_dir("adaptive");
+    let run = |dir: &str, reps: Option<&str>| {
+        let path = out.join(dir).to_string_lossy().into_owned();
+        let mut args = vec!["run", "--scenes", "teapot", "--structures", "bvh,org,svo", "--levels", "6"];
+        args.extend(["--width", "48", "--height", "32", "--threads", "2", "--no-images", "--out", &path]);
+        if let Some(n) = reps {
+            args.extend(["--reps", n]);
+        }
+        let o = harness(&args);
+        assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("timed work"), "the phase summary");
+        read_json(&out.join(dir).join("results.json"))
+    };
+    let series = |results: &serde_json::Value| -> Vec<serde_json::Value> {
+        let mut all = Vec::new();
+        for case in results["cases"].as_array().expect("cases") {
+            all.push(case["build"].clone());
+            all.extend(case["render"].as_array().expect("renders").iter().cloned());
+        }
+        all
+    };
+    let adaptive = run("adaptive", None);
+    assert_eq!(adaptive["settings"]["adaptive_reps"], true);
+    for s in series(&adaptive) {
+        let reps = s["reps"].as_u64().expect("reps");
+        assert!((3..=5).contains(&reps), "{s}");
+        assert_eq!(s["samples_ms"].as_array().map(Vec::len), Some(reps as usize));
+        let (lo, hi) = (s["median_ci_ms"][0].as_f64().expect("lo"), s["median_ci_ms"][1].as_f64().expect("hi"));
+        let median = s["ms_median"].as_f64().expect("median");
+        assert!(lo <= median && median <= hi, "{s}");
+        // Stopping before the most reps means the interval was tight or the budget spent.
+        let spent: f64 = s["samples_ms"].as_array().expect("samples").iter().filter_map(|x| x.as_f64()).sum();
+        assert!(reps == 5 || spent > 100.0 || (lo >= 0.98 * median && hi <= 1.02 * median), "stopped early: {s}");
+    }
+    let fixed = run("fixed", Some("4"));
+    assert!(fixed["settings"].get("adaptive_reps").is_none(), "absent when every case takes --reps");
+    for s in series(&fixed) {
+        assert_eq!(s["reps"], 4, "{s}");
+    }
+    let phases = &fixed["phases_s"];
+    let wall = phases["wall"].as_f64().expect("wall");
+    let parts = phases["total timed"].as_f64().expect("timed") + phases["total untimed"].as_f64().expect("untimed");
+    assert!(wall > 0.0 && (parts - wall).abs() < 1e-6 * wall.max(1.0), "{phases}");
+    let _ = std::fs::remove_dir_all(&out);
+}

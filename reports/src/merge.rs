@@ -52,6 +52,8 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         merged: Vec::new(),
         parts: Vec::new(),
         skipped: Vec::new(),
+        // Each run's own phases stay in its file.
+        phases_s: Default::default(),
     };
     for (tag, run) in runs {
         // The parts of many-part runs, each name once (a case names its part, not its run's).
@@ -139,6 +141,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 merged: Vec::new(),
                 parts: Vec::new(),
                 skipped: Vec::new(),
+                phases_s: Default::default(),
             };
             (Some(m.tag.clone()), view)
         })

@@ -135,7 +135,7 @@ mod tests {
     use crate::schema::Timing;
 
     fn case(structure: &str, ms: f64, paired_bvh_ms: Option<f64>, mrays: f64) -> Case {
-        let timing = |ms: f64| Timing { ms_median: ms, ms_min: ms, ms_max: ms, reps: 1, samples_ms: vec![ms] };
+        let timing = |ms: f64| Timing::from_samples(&[ms]);
         Case {
             scene: "s".into(),
             structure: structure.into(),

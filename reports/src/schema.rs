@@ -29,6 +29,11 @@ pub struct Results {
     /// not load, a build that failed. The run went on without them.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub skipped: Vec<SkippedCase>,
+    /// Where the run's wall time went, seconds by phase (timed builds and renders, warm-ups,
+    /// counting passes, agreement checks, images, reports, …, with `wall`, `total timed` and
+    /// `total untimed`); written when the run ends, so empty in a run still going.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
+    pub phases_s: BTreeMap<String, f64>,
 }
 
 /// A case of the matrix that produced no measurement, and why.
@@ -198,7 +203,13 @@ pub struct Settings {
     pub height: u32,
     pub threads: usize,
     pub warmup: u32,
+    /// The most timed repetitions per case (exactly this many unless `adaptive_reps`).
     pub reps: u32,
+    /// Timing stopped once each case's median was known: after 3 repetitions, when the median's
+    /// 95 % interval was within ±2 % (or 20 s of timed work were spent); each case's `reps` and
+    /// `median_ci_ms` say where it stopped. False (absent) when every case took `reps`.
+    #[serde(skip_serializing_if = "std::ops::Not::not", default)]
+    pub adaptive_reps: bool,
     /// Cargo profile and optimisation level the harness was compiled with.
     pub build_profile: String,
     pub params: BTreeMap<String, String>,
@@ -385,6 +396,7 @@ impl Results {
             merged: self.merged.clone(),
             parts: Vec::new(),
             skipped: Vec::new(),
+            phases_s: self.phases_s.clone(),
         }
     }
 
@@ -405,6 +417,12 @@ pub struct Timing {
     /// `i` against this rep `i`) can be formed later.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub samples_ms: Vec<f64>,
+    /// A 95 % confidence interval of the median, distribution-free: the order statistics
+    /// `[x(k), x(n+1−k)]` with the largest `k` whose binomial coverage is at least 95 %; with
+    /// fewer than 6 samples no such `k` exists and it is their whole range (coverage 1 − 2^(1−n):
+    /// 75 % for 3). `None` without samples.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub median_ci_ms: Option<(f64, f64)>,
 }
 
 impl Timing {
@@ -424,8 +442,30 @@ impl Timing {
             ms_max: s.last().copied().unwrap_or(0.0),
             reps: n as u32,
             samples_ms: samples.to_vec(),
+            median_ci_ms: (n > 0).then(|| {
+                let k = median_ci_rank(n);
+                (s[k - 1], s[n - k])
+            }),
         }
     }
+}
+
+/// The rank `k` (1-based) of the lower end of the median's 95 % interval over `n` samples: the
+/// largest `k ≥ 1` with P(Binomial(n, ½) ≤ k − 1) ≤ 2.5 %, or 1 where none is (n < 6).
+fn median_ci_rank(n: usize) -> usize {
+    // P(B ≤ j) accumulated term by term: C(n, j) / 2^n.
+    let mut term = 0.5f64.powi(n as i32);
+    let mut below = 0.0;
+    let mut k = 1;
+    for j in 0..n / 2 {
+        below += term;
+        if below > 0.025 {
+            break;
+        }
+        k = j + 1;
+        term *= (n - j) as f64 / (j + 1) as f64;
+    }
+    k.max(1)
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -582,4 +622,23 @@ pub struct Agreement {
 
 fn is_zero(n: &u64) -> bool {
     *n == 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_median_interval_takes_the_order_statistics_binomial_coverage_allows() {
+        // Tabulated ranks of the distribution-free 95 % interval: n = 6 → (1, 6), 9 → (2, 8),
+        // 20 → (6, 15), 50 → (18, 33).
+        for (n, k) in [(1, 1), (3, 1), (5, 1), (6, 1), (8, 1), (9, 2), (20, 6), (50, 18)] {
+            assert_eq!(median_ci_rank(n), k, "n = {n}");
+        }
+        let samples: Vec<f64> = (1..=20).rev().map(f64::from).collect();
+        let t = Timing::from_samples(&samples);
+        assert_eq!((t.ms_median, t.median_ci_ms), (10.5, Some((6.0, 15.0))));
+        assert_eq!(Timing::from_samples(&[3.0, 1.0, 2.0]).median_ci_ms, Some((1.0, 3.0)), "the range below 6");
+        assert_eq!(Timing::from_samples(&[]).median_ci_ms, None);
+    }
 }
