@@ -114,6 +114,50 @@ fn a_run_killed_twice_mid_case_resumes_to_the_uninterrupted_result() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Killed between cases — after teapot's cases, while the dragon loads (about a second, no case
+/// in flight) — and resumed: every case once, the dragon's loaded and run by the resumed run.
+#[test]
+#[cfg(unix)]
+fn a_run_killed_between_cases_resumes_with_every_case_once() {
+    let dir = temp_dir("resume-between");
+    let run = dir.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let mut args = vec!["run", "--scenes", "teapot,dragon", "--structures", "bvh,org", "--out", &out, "--no-images"];
+    args.extend_from_slice(TINY);
+    let _turn = turn();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the harness starts");
+    let start = Instant::now();
+    loop {
+        assert!(child.try_wait().expect("poll").is_none(), "the run ended before it could be killed");
+        let (finished, started) = (lines(&run.join("cases.jsonl")), lines(&run.join("attempts.jsonl")));
+        if finished == 2 && started == 2 {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "no progress after 120 s");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    child.kill().expect("SIGKILL");
+    let _ = child.wait();
+    let o = harness_in_turn(&["run", "--resume", &out]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && text.contains("2 cases kept"), "{text}");
+    let results = read_json(&run.join("results.json"));
+    let ran: Vec<(u64, &str)> = results["cases"]
+        .as_array()
+        .expect("cases")
+        .iter()
+        .map(|c| (c["index"].as_u64().unwrap_or(99), c["scene"].as_str().unwrap_or("")))
+        .collect();
+    assert_eq!(ran, [(0, "teapot"), (1, "teapot"), (2, "dragon"), (3, "dragon")]);
+    assert_eq!(lines(&run.join("attempts.jsonl")), 4, "no case started twice");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 #[cfg(unix)]
 fn a_case_cut_off_twice_is_recorded_as_failed_and_the_rest_run() {
