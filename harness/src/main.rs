@@ -5,6 +5,7 @@ mod alloc;
 mod budget;
 mod cli;
 mod compare;
+mod eta;
 mod gpu;
 mod images;
 mod machine;

@@ -23,6 +23,7 @@ use crate::agreement;
 use crate::alloc;
 use crate::budget::{self, Budget, BudgetError};
 use crate::cli::{Backend, PartPlan, Plan, RunArgs};
+use crate::eta::Eta;
 use crate::gpu;
 use crate::images;
 use crate::machine;
@@ -157,11 +158,17 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
                 * plan.structures.iter().map(|s| variants(plan, params, s).len() as u64).sum::<u64>()
         })
         .sum();
+    let mut pending: BTreeMap<String, u64> = BTreeMap::new();
+    for (part, params) in &prepared {
+        let plan = &part.plan;
+        for s in &plan.structures {
+            *pending.entry(s.clone()).or_default() += plan.scenes.len() as u64 * variants(plan, params, s).len() as u64;
+        }
+    }
+    let mut eta = Eta::new(pending);
     let bar = ProgressBar::new(cases).with_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases, ~{eta} left at this pace  {wide_msg}",
-        )
-        .context("progress template")?,
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases{prefix}  {wide_msg}")
+            .context("progress template")?,
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let started = Instant::now();
@@ -182,6 +189,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
             budget: &budget,
             gpu,
             progress: &progress,
+            eta: &mut eta,
         };
         matrix.run()?;
         if many {
@@ -250,6 +258,8 @@ struct Matrix<'a> {
     gpu: Option<&'static GpuContext>,
     /// What an interrupted run got through (empty for a new run).
     progress: &'a Progress,
+    /// The time left, shown in the bar's prefix.
+    eta: &'a mut Eta,
 }
 
 /// How far an interrupted run got: the cases it finished, and how often each was started.
@@ -296,6 +306,7 @@ impl Matrix<'_> {
             for (structure, p, variant, i) in matrix {
                 let key = (part_name.clone(), i);
                 if self.progress.done.contains(&key) {
+                    self.eta.skipped(structure);
                     bar.inc(1);
                 } else if self.progress.started.get(&key).copied().unwrap_or(0) >= MAX_CUT_OFFS {
                     let reason = format!(
@@ -304,6 +315,7 @@ impl Matrix<'_> {
                     );
                     bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
                     self.skip(scene_name, structure, variant, "error", &reason)?;
+                    self.eta.skipped(structure);
                     bar.inc(1);
                 } else {
                     pending.push((structure, p, variant, i));
@@ -330,6 +342,9 @@ impl Matrix<'_> {
                     k.cases = matrix.len();
                     k.part = self.part.map(String::from);
                     self.out.push_skipped(k)?;
+                    for (structure, ..) in &matrix {
+                        self.eta.skipped(structure);
+                    }
                     bar.inc(matrix.len() as u64);
                     continue;
                 }
@@ -349,6 +364,7 @@ impl Matrix<'_> {
             }
             let mut ctx = SceneRun::new(&scene, load_ms, self.gpu);
             for (structure, params, variant, i) in matrix {
+                let case_started = Instant::now();
                 self.out.start_case(&(part_name.clone(), i))?;
                 // One case's failure, a panic included, costs that case alone: it is listed with
                 // its reason and the matrix goes on.
@@ -388,6 +404,8 @@ impl Matrix<'_> {
                         self.skip(scene_name, structure, variant, "panic", &reason)?;
                     }
                 }
+                self.eta.done(structure, case_started.elapsed().as_secs_f64());
+                bar.set_prefix(self.eta.label());
                 bar.inc(1);
             }
         }
@@ -803,8 +821,10 @@ fn timed_animation(
                 hit_fractions += own.hit_fraction();
             }
         }
+        let ms = ms_since(t);
+        phases::add_ms(if i >= warmup { Phase::TimedRenders } else { Phase::UntimedRenders }, ms);
         if i >= warmup {
-            samples.push(ms_since(t) / frames.len() as f64);
+            samples.push(ms / frames.len() as f64);
         }
     }
     let timing = Timing::from_samples(&samples);

@@ -26,6 +26,7 @@ use structures::{BuildInput, Structure};
 
 use crate::budget::{self, Budget};
 use crate::cli::Plan;
+use crate::phases::{self, Phase};
 
 /// The ray structures whose shadow rays stand beside the point queries.
 const RAY_STRUCTURES: [&str; 4] = ["bvh", "esvo", "svdag", "org"];
@@ -133,8 +134,11 @@ fn compare_answers(
         for i in 0..reps {
             let t = Instant::now();
             out = f();
+            let ms = ms_since(t);
+            let phase = if i >= plan.warmup { Phase::TimedRenders } else { Phase::UntimedRenders };
+            phases::add_ms(phase, ms);
             if i >= plan.warmup {
-                samples.push(ms_since(t));
+                samples.push(ms);
             }
         }
         (out, samples)
