@@ -107,7 +107,7 @@ pub enum Preset {
     /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
     /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
     /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;
-    /// with the paper's figures and growth per doubling. Long: 60 cases, about 10 minutes on 2 cores.
+    /// with the paper's figures and growth per doubling. 60 cases, about 4 minutes on 2 cores.
     SvdagTables,
     /// ESVO at scale (issue 18) on the dragon beside the reference BVH at 1024×1024: L = 10…14
     /// (2^14 = 16384³ voxels), blocks, bytes per voxel, build peak and time (each build timed
@@ -131,7 +131,7 @@ pub enum Preset {
     /// Seed 000 §5.6 and §6.2: ESVO with and without the beam optimisation (8×8 blocks) at 2048³
     /// on bunny, dragon, city, terrain and room at 1024×1024: iterations per primary ray (the
     /// pre-pass's included) and render time, and bytes per voxel beside the paper's budget. Each
-    /// build is timed once. About 4 minutes on 2 cores.
+    /// build is timed once. About a minute on 2 cores.
     EsvoBeam,
     /// Grid or octree on the same voxels (seed 003, issue 28): the hierarchical grids — vdb (dense
     /// and compact tables, NanoVDB's HDDA, and compact with empty blocks coalesced), tree64 (tree
