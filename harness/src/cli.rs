@@ -113,7 +113,7 @@ pub enum Preset {
     /// (2^14 = 16384³ voxels), blocks, bytes per voxel, build peak and time (each build timed
     /// once: the L = 14 build alone takes minutes), Mrays/s; and L = 14 with LOD at one pixel
     /// (`esvo.lod_pixels=1`) against L = 11 without; L = 11 forced into ~100 blocks beside its one
-    /// block. Long: about 20 minutes and 8 GB on 2 cores.
+    /// block. Long: about 10 minutes and 8 GB on 2 cores.
     EsvoScale,
     /// Seed 001 Tables 5–6 on kitchen-anim, robots-anim and fire-anim (24 frames at 1024³): nodes
     /// per frame and in all for the SVO, a difference tree, each frame's SVDAG and the temporal
