@@ -119,7 +119,7 @@ pub enum Preset {
     /// per frame and in all for the SVO, a difference tree, each frame's SVDAG and the temporal
     /// SVDAG (both merge modes, with their build peaks), the per-frame append time, and the CPU
     /// frame rate rendering every frame through its root at 1024×768, 800×600 and 400×300; the
-    /// reference BVH and a plain SVDAG of frame 0 beside them. About 10 minutes on 2 cores.
+    /// reference BVH and a plain SVDAG of frame 0 beside them. About 7 minutes on 2 cores.
     SvdagTemporal,
     /// Seed 001 Table 4 on room (closed objects, a ceiling lamp: six light faces), city (closed
     /// buildings) and terrain (few closed objects): storage of a shadow map (S1), the shadow SVDAG
