@@ -126,7 +126,7 @@ pub enum Preset {
     /// (S2) and the optimised one (S3) at 1024³ … 16384³ (as far as memory allows), growth per
     /// doubling and build time beside the reference BVH's; at 1024³ the shadow workload's points
     /// of a 512² render answered by point queries, the shadow map and shadow rays through bvh,
-    /// esvo, svdag and org, each against the BVH's rays. About 10 minutes on 2 cores.
+    /// esvo, svdag and org, each against the BVH's rays. About 5 minutes on 2 cores.
     SvdagShadow,
     /// Seed 000 §5.6 and §6.2: ESVO with and without the beam optimisation (8×8 blocks) at 2048³
     /// on bunny, dragon, city, terrain and room at 1024×1024: iterations per primary ray (the
