@@ -82,7 +82,6 @@ fn a_run_writes_results_report_and_images() {
             assert!(linked, "{img} is not linked from report.html");
         }
     }
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
@@ -103,7 +102,6 @@ fn a_bad_scene_is_skipped_with_its_error_and_the_run_goes_on() {
     let skipped = &results["skipped"][0];
     assert_eq!((skipped["kind"].as_str(), skipped["structure"].as_str()), (Some("scene"), Some("*")), "{results}");
     assert!(skipped["reason"].as_str().is_some_and(|r| r.contains("line 4")), "{skipped}");
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// `harness render`: images only, at the size asked, each structure's heat map on the scene's one
@@ -142,7 +140,6 @@ fn render_writes_images_only() {
     }
     assert!(!names.iter().any(|n| n.starts_with("teapot__bvh__primary__diff")), "the reference has no difference view");
     assert!(!names.iter().any(|n| n.ends_with(".json")), "nothing is timed or recorded: {names:?}");
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
@@ -174,10 +171,11 @@ fn gpu_required() -> bool {
 
 #[test]
 fn asking_for_the_gpu_without_a_usable_adapter_fails_the_run() {
+    let out = temp_dir("no-adapter");
     let _turn = turn();
     let o = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["run", "--scenes", "teapot", "--structures", "bvh", "--gpu", "--out"])
-        .arg(temp_dir("no-adapter"))
+        .arg(&out)
         .env("ACCEL_BENCH_ADAPTER", "no-such-adapter-anywhere")
         .output()
         .expect("the harness runs");
@@ -227,7 +225,6 @@ fn gpu_rows_name_the_adapter_and_agree_with_the_cpu() {
     assert!(report.contains("- GPU: ") && report.contains("| gpu | primary |"), "{report}");
     let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
     assert!(html.contains("<b>GPU</b>") && html.contains("gpu/primary"));
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
@@ -295,7 +292,6 @@ fn compare_passes_a_rerun_and_fails_doubled_memory() {
     let o = harness(&["compare", &b.to_string_lossy(), &a.to_string_lossy(), "--threshold", "speed=0.1"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown metric 'speed'"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A CPU hog in a second process, stopped when dropped.
@@ -320,7 +316,6 @@ fn compare_is_not_fooled_by_a_loaded_machine() {
     }
     let o = compare(&loaded, &quiet);
     assert_eq!(o.status.code(), Some(0), "timing ratios survive the load:\n{}", stdout(&o));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -349,7 +344,6 @@ fn merge_tags_each_machines_cases() {
     assert_eq!(compare(&m, &m).status.code(), Some(0));
     let o = harness(&["merge", &a_arg, &b_arg, "--tag", "one", "--out", &m_arg]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--tag"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Without `--reps`, each build and render series takes 3 to 5 timed reps (stopping once its
@@ -400,5 +394,4 @@ fn repetitions_adapt_unless_a_count_is_given() {
     let wall = phases["wall"].as_f64().expect("wall");
     let parts = phases["total timed"].as_f64().expect("timed") + phases["total untimed"].as_f64().expect("untimed");
     assert!(wall > 0.0 && (parts - wall).abs() < 1e-6 * wall.max(1.0), "{phases}");
-    let _ = std::fs::remove_dir_all(&out);
 }

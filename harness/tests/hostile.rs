@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{TINY, harness, read_json, temp_dir, turn};
+use common::{PATIENCE, TINY, harness, lines, read_json, run_args, stderr, temp_dir, turn};
 
 /// Every structure, so each one meets each input.
 const ALL: &str = "bvh,ug,rg,rg2,org,svo-naive,svo,esvo,svdag";
@@ -22,38 +22,16 @@ fn harness_within(args: &[&str], limit: Duration) -> Output {
 /// came, so waiting for the other tests does not count).
 fn harness_timed(args: &[&str], limit: Duration) -> (Output, Duration) {
     let _turn = turn();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the harness starts");
+    let mut child = common::spawn_harness(args, true);
     let start = Instant::now();
-    while child.try_wait().expect("poll the harness").is_none() {
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            panic!("harness {args:?} ran past {limit:?}: a hang");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    common::wait_until(&mut child, limit, &format!("harness {args:?} to end (a hang)"), || false);
     let ran = start.elapsed();
     (child.wait_with_output().expect("the harness output"), ran)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 fn no_panic(o: &Output) {
     let text = stderr(o);
     assert!(!text.contains("panicked"), "a panic: {text}");
-}
-
-fn run_args<'a>(scenes: &'a str, structures: &'a str, out: &'a str) -> Vec<&'a str> {
-    let mut args = vec!["run", "--scenes", scenes, "--structures", structures, "--levels", "6", "--out", out];
-    args.extend_from_slice(TINY);
-    args.push("--no-images");
-    args
 }
 
 /// Degenerate geometry: a single point, a collinear triangle, a triangle 1e-30 across, and
@@ -96,7 +74,6 @@ fn degenerate_meshes_get_a_defined_result_from_every_structure() {
             assert!(mrays.is_finite() && mrays > 0.0, "{}: {render}", case["structure"]);
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Finite coordinates whose extent overflows f32 (they once panicked in the grid builder): the
@@ -121,7 +98,6 @@ fn an_overflowing_scene_costs_its_own_cases_only() {
     let k = &skipped[0];
     assert!(k["kind"] == "scene" && k["scene"].as_str().is_some_and(|s| s.ends_with("huge.obj")), "{k}");
     assert!(k["structure"] == "*" && k["cases"] == 3, "{k}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Work that cannot fit is refused before it starts, in well under a second each, and listed with
@@ -174,7 +150,6 @@ fn impossible_work_is_refused_up_front_and_the_matrix_goes_on() {
     // Refusals cost no real work: the whole run, bunny's two small cases included, takes seconds
     // (building svo-naive at level 16 would take hours, if memory allowed it).
     assert!(elapsed < Duration::from_secs(120), "{elapsed:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -219,7 +194,6 @@ fn bad_parameters_are_rejected_with_what_would_work() {
     let o = harness(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("'org.lambda' is read only by org, which is not in this run"), "{}", stderr(&o));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -232,7 +206,6 @@ fn an_unwritable_out_is_a_clear_error() {
     no_panic(&o);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("creating") && stderr(&o).contains("a-file"), "{}", stderr(&o));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// SIGKILL in the middle of a case leaves results.json, cases.jsonl and the reports valid, holding
@@ -245,22 +218,11 @@ fn a_killed_run_keeps_every_finished_case_and_a_second_run_cannot_overwrite_it()
     let out = run.to_string_lossy().into_owned();
     let args = run_args("teapot,bunny,dragon-11k,menger", "bvh,org,svo,esvo,svdag", &out);
     let _turn = turn();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(&args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the harness starts");
+    let mut child = common::spawn_harness(&args, false);
     let jsonl = run.join("cases.jsonl");
-    let start = Instant::now();
-    let lines = |p: &Path| std::fs::read_to_string(p).map(|t| t.lines().count()).unwrap_or(0);
-    while lines(&jsonl) < 4 {
-        assert!(child.try_wait().expect("poll").is_none(), "the run ended before it could be killed");
-        assert!(start.elapsed() < Duration::from_secs(120), "no cases after 120 s");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    child.kill().expect("SIGKILL"); // std's kill is SIGKILL on Unix
-    let _ = child.wait();
+    let four_cases = common::wait_until(&mut child, PATIENCE, "four cases", || lines(&jsonl) >= 4);
+    assert!(four_cases, "the run ended before it could be killed");
+    common::kill(&mut child);
 
     // Every newline-terminated line is a whole case. A kill during the write of a line can leave
     // a piece of it after the last newline (Linux stops a large write at a fatal signal): that
@@ -301,7 +263,6 @@ fn a_killed_run_keeps_every_finished_case_and_a_second_run_cannot_overwrite_it()
     assert!(!o.status.success());
     assert!(stderr(&o).contains("already holds a run"), "{}", stderr(&o));
     assert_eq!(std::fs::read(run.join("results.json")).expect("read"), before, "the first run is untouched");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A run holds its directory for its whole life: a second run into it is refused while it runs,
@@ -340,17 +301,10 @@ fn a_running_run_keeps_its_directory_against_a_second_run() {
         "--out",
         &out,
     ];
-    let mut first = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(first_args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the harness starts");
-    let start = Instant::now();
-    while !run.join("cases.jsonl").exists() {
-        assert!(start.elapsed() < Duration::from_secs(60), "the first run never started writing");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    let mut first = common::spawn_harness(&first_args, false);
+    let writing =
+        common::wait_until(&mut first, PATIENCE, "the first run's cases.jsonl", || run.join("cases.jsonl").exists());
+    assert!(writing, "the first run ended before it wrote anything");
     let mut args = run_args("teapot", "bvh", &out);
     args.push("--overwrite");
     let second = common::harness_in_turn(&args);
@@ -364,7 +318,6 @@ fn a_running_run_keeps_its_directory_against_a_second_run() {
     let cases = results["cases"].as_array().expect("cases");
     assert_eq!(cases.len(), 12, "the first run's cases, all of them");
     assert_eq!(results["settings"]["scenes"], serde_json::json!(["teapot", "bunny", "dragon"]), "the first run's");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Two runs started at the same moment into one new directory: exactly one runs, the other is
@@ -376,14 +329,7 @@ fn of_two_runs_started_at_once_into_one_directory_one_is_refused() {
     let run = dir.join("run");
     let out = run.to_string_lossy().into_owned();
     let _turn = turn();
-    let spawn = |structure: &str| {
-        Command::new(env!("CARGO_BIN_EXE_harness"))
-            .args(run_args("teapot", structure, &out))
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("the harness starts")
-    };
+    let spawn = |structure: &str| common::spawn_harness(&run_args("teapot", structure, &out), true);
     let (a, b) = (spawn("bvh"), spawn("org"));
     let (a, b) = (a.wait_with_output().expect("a ends"), b.wait_with_output().expect("b ends"));
     let ran: Vec<&str> =
@@ -396,7 +342,6 @@ fn of_two_runs_started_at_once_into_one_directory_one_is_refused() {
     let structures: Vec<&str> =
         results["cases"].as_array().expect("cases").iter().filter_map(|c| c["structure"].as_str()).collect();
     assert_eq!(structures, ran, "the directory holds the run that ran");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A run on a full disk stops with a clear error and leaves no temporary file behind. Needs a
@@ -417,7 +362,6 @@ fn a_full_disk_is_a_clear_error_and_leaves_no_temporary_file() {
         .is_ok_and(|s| s.success());
     if !mounted {
         eprintln!("skipped: cannot mount a small tmpfs here (needs root or CAP_SYS_ADMIN)");
-        let _ = std::fs::remove_dir_all(&dir);
         return;
     }
     // Fill it to the last byte, then give back a few pages: the run starts and fails on a write.
@@ -439,7 +383,6 @@ fn a_full_disk_is_a_clear_error_and_leaves_no_temporary_file() {
     assert!(!o.status.success(), "a run that could not write its results succeeded: {text}");
     assert!(text.contains("No space left on device") && text.contains("writing"), "{text}");
     assert!(listing.iter().all(|f| !f.ends_with(".tmp")), "temporary files left: {listing:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A scene a billion units wide (within the ±2^40 supported): the voxel structures see the same
@@ -469,7 +412,6 @@ fn a_scene_a_billion_units_wide_renders_in_every_voxel_structure() {
         // Voxel hits differ from the triangles' only along the silhouette.
         assert!((hits(case) - bvh).abs() < 0.02, "{}: {} vs the BVH's {bvh}", case["structure"], hits(case));
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The triangle structures of the default preset (Embree where its library is installed).
@@ -513,7 +455,6 @@ fn two_hundred_thousand_copies_of_one_face_run_every_triangle_structure() {
             assert!(wrong.is_some_and(|w| w <= allowed), "{}: {agreement}", case["structure"]);
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// 200,000 zero-area faces on three vertices (repeated indices, and three collinear vertices):
@@ -544,7 +485,6 @@ fn zero_area_faces_are_dropped_before_any_build() {
     }
     let skipped = results["skipped"].as_array().expect("skipped");
     assert!(skipped.len() == 1 && skipped[0]["kind"] == "scene" && skipped[0]["cases"] == 3, "{skipped:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A 3.9 MB glTF of 100,000 point primitives (nothing a ray can hit) is refused in a few lines: the
@@ -587,7 +527,6 @@ fn a_scene_of_a_hundred_thousand_unusable_primitives_costs_a_few_lines() {
     let cases = ALL.split(',').count();
     assert_eq!(skipped.len(), 1, "the scene is listed once: {skipped:?}");
     assert!(skipped[0]["structure"] == "*" && skipped[0]["cases"] == cases, "{}", skipped[0]);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A scene path that is a device or a pipe was read until the process was killed for memory
@@ -620,7 +559,6 @@ fn scene_paths_that_are_not_regular_files_are_refused() {
         let line = text.lines().find(|l| l.contains(&name)).unwrap_or_else(|| panic!("{name} not named: {text}"));
         assert!(line.contains(&format!("not a regular file but {kind}")), "{line}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A scene file is weighed against the memory budget before it is read, and an `.obj.gz` that
@@ -654,7 +592,6 @@ fn scene_files_beyond_the_budget_are_refused_before_they_are_read() {
     let skipped = results["skipped"].as_array().expect("skipped");
     assert_eq!(skipped.len(), 2, "{skipped:?}");
     assert!(skipped.iter().all(|k| k["kind"] == "budget"), "{skipped:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Counts that size threads or allocations are bounded on the command line: `--threads 100000`

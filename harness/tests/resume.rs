@@ -4,51 +4,43 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::path::{Path, PathBuf};
 
-use common::{TINY, harness_in_turn, read_json, temp_dir, turn};
+use common::{
+    PATIENCE, TINY, harness_in_turn, kill, lines, read_json, spawn_harness, stderr, temp_dir, turn, wait_until,
+};
 
 const SCENES: &str = "teapot,bunny,dragon-11k,menger";
 const STRUCTURES: &str = "bvh,org,svo,esvo,svdag";
 const CASES: usize = 20;
 
 fn run_args(out: &str) -> Vec<&str> {
-    let mut args = vec!["run", "--scenes", SCENES, "--structures", STRUCTURES, "--levels", "6", "--out", out];
-    args.extend_from_slice(TINY);
-    args.push("--no-images");
-    args
-}
-
-fn lines(path: &Path) -> usize {
-    std::fs::read_to_string(path).map(|t| t.matches('\n').count()).unwrap_or(0)
+    common::run_args(SCENES, STRUCTURES, out)
 }
 
 /// Starts `args` and SIGKILLs it once at least `cases` cases are finished and another is in
 /// flight (started, not finished). Returns false if the run ended first.
 fn kill_mid_case(args: &[&str], run: &Path, cases: usize) -> bool {
-    let mut child: Child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the harness starts");
-    let start = Instant::now();
-    loop {
-        if child.try_wait().expect("poll").is_some() {
-            return false;
-        }
+    let mut child = spawn_harness(args, false);
+    let in_flight = || {
         let finished = lines(&run.join("cases.jsonl"));
-        if finished >= cases && lines(&run.join("attempts.jsonl")) > finished {
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(120), "no progress after 120 s");
-        std::thread::sleep(Duration::from_millis(2));
+        finished >= cases && lines(&run.join("attempts.jsonl")) > finished
+    };
+    if !wait_until(&mut child, PATIENCE, &format!("{cases} cases done and one in flight"), in_flight) {
+        return false;
     }
-    child.kill().expect("SIGKILL");
-    let _ = child.wait();
+    kill(&mut child);
     true
+}
+
+/// teapot × `structures` run to the end in `dir/run`: the run's folder and its `--out`. The
+/// caller holds the turn.
+fn finished_run(dir: &Path, structures: &str) -> (PathBuf, String) {
+    let run = dir.join("run");
+    let out = run.to_string_lossy().into_owned();
+    let o = harness_in_turn(&common::run_args("teapot", structures, &out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    (run, out)
 }
 
 /// The deterministic metrics of a run's cases, keyed by scene and structure.
@@ -89,13 +81,13 @@ fn a_run_killed_twice_mid_case_resumes_to_the_uninterrupted_result() {
     let (full_out, cut_out) = (full.to_string_lossy().into_owned(), cut.to_string_lossy().into_owned());
     let _turn = turn();
     let o = harness_in_turn(&run_args(&full_out));
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     assert!(kill_mid_case(&run_args(&cut_out), &cut, 3), "the run ended before it could be killed");
     // Resumed by its directory alone, and killed again mid-case.
     let resume = ["run", "--resume", &cut_out];
     assert!(kill_mid_case(&resume, &cut, 9), "the resumed run ended before it could be killed");
     let o = harness_in_turn(&resume);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(o.status.success(), "{text}");
     assert!(text.contains("resuming") && text.contains("cases kept"), "{text}");
 
@@ -111,7 +103,6 @@ fn a_run_killed_twice_mid_case_resumes_to_the_uninterrupted_result() {
     for scene in SCENES.split(',') {
         assert!(report.contains(scene), "the report covers {scene}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Killed between cases — after teapot's cases, while the dragon loads (about a second, no case
@@ -125,26 +116,15 @@ fn a_run_killed_between_cases_resumes_with_every_case_once() {
     let mut args = vec!["run", "--scenes", "teapot,dragon", "--structures", "bvh,org", "--out", &out, "--no-images"];
     args.extend_from_slice(TINY);
     let _turn = turn();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(&args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the harness starts");
-    let start = Instant::now();
-    loop {
-        assert!(child.try_wait().expect("poll").is_none(), "the run ended before it could be killed");
-        let (finished, started) = (lines(&run.join("cases.jsonl")), lines(&run.join("attempts.jsonl")));
-        if finished == 2 && started == 2 {
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(120), "no progress after 120 s");
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    child.kill().expect("SIGKILL");
-    let _ = child.wait();
+    let mut child = spawn_harness(&args, false);
+    let between = || lines(&run.join("cases.jsonl")) == 2 && lines(&run.join("attempts.jsonl")) == 2;
+    assert!(
+        wait_until(&mut child, PATIENCE, "teapot's two cases done, no other started", between),
+        "the run ended before it could be killed"
+    );
+    kill(&mut child);
     let o = harness_in_turn(&["run", "--resume", &out]);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(o.status.success() && text.contains("2 cases kept"), "{text}");
     let results = read_json(&run.join("results.json"));
     let ran: Vec<(u64, &str)> = results["cases"]
@@ -155,7 +135,6 @@ fn a_run_killed_between_cases_resumes_with_every_case_once() {
         .collect();
     assert_eq!(ran, [(0, "teapot"), (1, "teapot"), (2, "dragon"), (3, "dragon")]);
     assert_eq!(lines(&run.join("attempts.jsonl")), 4, "no case started twice");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -173,7 +152,7 @@ fn a_case_cut_off_twice_is_recorded_as_failed_and_the_rest_run() {
     let in_flight: serde_json::Value = serde_json::from_str(&last).expect("json");
     std::fs::write(cut.join("attempts.jsonl"), format!("{attempts}{last}\n")).expect("write");
     let o = harness_in_turn(&["run", "--resume", &cut_out]);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(!o.status.success(), "a case recorded as failed fails the run: {text}");
     let results = read_json(&cut.join("results.json"));
     assert_eq!(results["cases"].as_array().map(Vec::len), Some(CASES - 1), "every other case ran");
@@ -183,24 +162,20 @@ fn a_case_cut_off_twice_is_recorded_as_failed_and_the_rest_run() {
     let ran: Vec<u64> =
         results["cases"].as_array().expect("cases").iter().filter_map(|c| c["index"].as_u64()).collect();
     assert!(!ran.contains(&in_flight["index"].as_u64().expect("index")), "the cut-off case was not started again");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_different_matrix_or_machine_is_refused_with_what_differs() {
     let dir = temp_dir("resume-refused");
-    let run = dir.join("run");
-    let out = run.to_string_lossy().into_owned();
     let _turn = turn();
-    let mut args = vec!["run", "--scenes", "teapot", "--structures", "bvh", "--out", &out, "--no-images"];
-    args.extend_from_slice(TINY);
-    assert!(harness_in_turn(&args).status.success());
+    let (run, out) = finished_run(&dir, "bvh");
     let before = std::fs::read(run.join("results.json")).expect("results");
 
-    let mut other = vec!["run", "--resume", &out, "--scenes", "teapot", "--structures", "org", "--no-images"];
+    let mut other =
+        vec!["run", "--resume", &out, "--scenes", "teapot", "--structures", "org", "--levels", "6", "--no-images"];
     other.extend_from_slice(TINY);
     let o = harness_in_turn(&other);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(!o.status.success());
     assert!(text.contains("cannot be resumed") && text.contains("structures: [\"bvh\"] → [\"org\"]"), "{text}");
     assert_eq!(std::fs::read(run.join("results.json")).expect("results"), before, "left as it was");
@@ -209,29 +184,23 @@ fn a_different_matrix_or_machine_is_refused_with_what_differs() {
     record["machine"]["cpu"] = serde_json::json!("a CPU from elsewhere");
     std::fs::write(run.join("results.json"), record.to_string()).expect("write");
     let o = harness_in_turn(&["run", "--resume", &out]);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(!o.status.success() && text.contains("machine cpu: \"a CPU from elsewhere\" →"), "{text}");
 
     let o = harness_in_turn(&["run", "--resume", &dir.to_string_lossy()]);
-    let text = String::from_utf8_lossy(&o.stderr);
+    let text = stderr(&o);
     assert!(!o.status.success() && text.contains("holds no run to resume"), "{text}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Resuming a run that finished runs nothing and leaves its cases as they were.
 #[test]
 fn resuming_a_finished_run_runs_nothing() {
     let dir = temp_dir("resume-done");
-    let run = dir.join("run");
-    let out = run.to_string_lossy().into_owned();
     let _turn = turn();
-    let mut args = vec!["run", "--scenes", "teapot", "--structures", "bvh,org", "--out", &out, "--no-images"];
-    args.extend_from_slice(TINY);
-    assert!(harness_in_turn(&args).status.success());
+    let (run, out) = finished_run(&dir, "bvh,org");
     let cases = read_json(&run.join("results.json"))["cases"].clone();
     let o = harness_in_turn(&["run", "--resume", &out]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(read_json(&run.join("results.json"))["cases"], cases);
     assert_eq!(lines(&run.join("attempts.jsonl")), 2, "no case started again");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,9 +1,11 @@
-//! Helpers shared by the harness's end-to-end tests: run the binary one at a time, fresh
-//! temporary folders, JSON files.
+//! Helpers shared by the harness's end-to-end tests: run the binary one at a time (in the
+//! foreground, or in the background to be watched and killed), fresh temporary folders, JSON files.
 #![allow(dead_code)] // each test binary uses its own subset
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// One harness at a time: the tests' timings (and the loaded-machine test's load) stay their own.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -22,11 +24,99 @@ pub fn harness_in_turn(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_harness")).args(args).output().expect("the harness runs")
 }
 
-pub fn temp_dir(name: &str) -> PathBuf {
+/// How long a test waits for a run to make progress before it calls it a hang.
+pub const PATIENCE: Duration = Duration::from_secs(120);
+
+/// Starts the harness in the background; the caller holds the turn. Its output is kept for
+/// `wait_with_output` when `keep_output`, else discarded.
+pub fn spawn_harness(args: &[&str], keep_output: bool) -> Child {
+    let output = || if keep_output { Stdio::piped() } else { Stdio::null() };
+    Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(args)
+        .stdout(output())
+        .stderr(output())
+        .spawn()
+        .expect("the harness starts")
+}
+
+/// Polls `ready` until it holds (true) or `child` has ended (false). Past `limit` the child is
+/// killed and the test fails, naming `what` it waited for: a hang fails instead of stalling CI.
+pub fn wait_until(child: &mut Child, limit: Duration, what: &str, mut ready: impl FnMut() -> bool) -> bool {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().expect("poll the harness").is_some() {
+            return false;
+        }
+        if ready() {
+            return true;
+        }
+        if start.elapsed() > limit {
+            kill(child);
+            panic!("{what}: not after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// SIGKILL (std's `kill` on Unix), and the child reaped.
+pub fn kill(child: &mut Child) {
+    child.kill().expect("SIGKILL");
+    let _ = child.wait();
+}
+
+/// Newline-terminated lines in a file; 0 for a file not written yet.
+pub fn lines(path: &Path) -> usize {
+    std::fs::read_to_string(path).map(|t| t.matches('\n').count()).unwrap_or(0)
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh folder for one test, removed when the test passes; a failed test's is kept to look
+/// into.
+pub struct TempDir(PathBuf);
+
+pub fn temp_dir(name: &str) -> TempDir {
     let dir = std::env::temp_dir().join(format!("accel-bench-cli-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    TempDir(dir)
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<OsStr> for TempDir {
+    fn as_ref(&self) -> &OsStr {
+        self.0.as_os_str()
+    }
+}
+
+/// A small run's arguments: `scenes` × `structures` at level 6, tiny frames, no images.
+pub fn run_args<'a>(scenes: &'a str, structures: &'a str, out: &'a str) -> Vec<&'a str> {
+    let mut args = vec!["run", "--scenes", scenes, "--structures", structures, "--levels", "6", "--out", out];
+    args.extend_from_slice(TINY);
+    args.push("--no-images");
+    args
 }
 
 pub fn read_json(path: &Path) -> serde_json::Value {
