@@ -142,9 +142,9 @@ pub fn available_bytes() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// Bytes of a scene before it is generated, where its name says its size (`grass-<N>`,
-/// `name@sub<k>` of such a scene); `None` otherwise (files and the fixed built-in scenes are
-/// checked by their triangle count once loaded).
+/// Bytes of a scene before it is read or generated, where its size is known from its name (the
+/// built-in scenes, `grass-<N>`, `name@sub<k>` of either); `None` otherwise (files are weighed by
+/// their size, animations by their frame once made).
 pub fn scene_bytes(name: &str) -> Option<u64> {
     scenes::builtin::estimated_triangles(name).map(|n| n.saturating_mul(SCENE_BYTES_PER_TRIANGLE))
 }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressState, ProgressStyle};
 use kernels::cpu::render::{self, Frame, ShadeContext, Workload};
 use kernels::gpu::GpuContext;
 use kernels::{Accel, StructureEntry};
@@ -23,7 +23,7 @@ use crate::agreement;
 use crate::alloc;
 use crate::budget::{self, Budget, BudgetError};
 use crate::cli::{Backend, PartPlan, Plan, RunArgs};
-use crate::eta::Eta;
+use crate::eta::{Countdown, Eta, EtaCase};
 use crate::gpu;
 use crate::images;
 use crate::machine;
@@ -150,25 +150,25 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         );
     }
 
-    let cases: u64 = prepared
-        .iter()
-        .map(|(part, params)| {
-            let plan = &part.plan;
-            plan.scenes.len() as u64
-                * plan.structures.iter().map(|s| variants(plan, params, s).len() as u64).sum::<u64>()
-        })
-        .sum();
-    let mut pending: BTreeMap<String, u64> = BTreeMap::new();
+    let mut planned = Vec::new();
     for (part, params) in &prepared {
-        let plan = &part.plan;
-        for s in &plan.structures {
-            *pending.entry(s.clone()).or_default() += plan.scenes.len() as u64 * variants(plan, params, s).len() as u64;
-        }
+        let name = many.then(|| part.name.to_string());
+        planned.extend(planned_cases(&part.plan, params).into_iter().map(|c| {
+            let kind = c.params.iter().fold(c.structure.to_string(), |k, (key, v)| format!("{k} {key}={v}"));
+            let case = EtaCase { scene: c.scene.to_string(), structure: c.structure.to_string(), kind };
+            ((name.clone(), c.index), case)
+        }));
     }
-    let mut eta = Eta::new(pending);
+    let cases = planned.len() as u64;
+    let mut eta = Eta::new(planned);
+    let countdown = Countdown::default();
+    let left = countdown.clone();
     let bar = ProgressBar::new(cases).with_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases{prefix}  {wide_msg}")
-            .context("progress template")?,
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases{left}  {wide_msg}")
+            .context("progress template")?
+            .with_key("left", move |_: &ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = w.write_str(&left.label());
+            }),
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let started = Instant::now();
@@ -190,6 +190,8 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
             gpu,
             progress: &progress,
             eta: &mut eta,
+            run_started: started,
+            countdown: &countdown,
         };
         matrix.run()?;
         if many {
@@ -258,8 +260,12 @@ struct Matrix<'a> {
     gpu: Option<&'static GpuContext>,
     /// What an interrupted run got through (empty for a new run).
     progress: &'a Progress,
-    /// The time left, shown in the bar's prefix.
-    eta: &'a mut Eta,
+    /// The time left, estimated after each case.
+    eta: &'a mut Eta<CaseKey>,
+    /// When the run (this session of it) started.
+    run_started: Instant,
+    /// The time left, shown in the bar.
+    countdown: &'a Countdown,
 }
 
 /// How far an interrupted run got: the cases it finished, and how often each was started.
@@ -291,22 +297,16 @@ impl Matrix<'_> {
     fn scenes(&mut self) -> Result<()> {
         let (plan, params, bar, budget) = (self.plan, self.params, self.bar, self.budget);
         let part_name = self.part.map(String::from);
-        let mut index = 0u64;
-        for scene_name in &plan.scenes {
-            let mut matrix: Vec<(&String, Params, Option<String>, u64)> = Vec::new();
-            for s in &plan.structures {
-                for (p, v) in variants(plan, params, s) {
-                    matrix.push((s, p, v, index));
-                    index += 1;
-                }
-            }
+        let planned = planned_cases(plan, params);
+        for matrix in planned.chunk_by(|a, b| a.scene == b.scene) {
+            let scene_name = matrix[0].scene;
             // An interrupted run's finished cases are kept; a case cut off mid-way too often is
             // recorded as failed.
             let mut pending = Vec::new();
-            for (structure, p, variant, i) in matrix {
-                let key = (part_name.clone(), i);
+            for c in matrix {
+                let (structure, variant, key) = (c.structure, c.variant.clone(), (part_name.clone(), c.index));
                 if self.progress.done.contains(&key) {
-                    self.eta.skipped(structure);
+                    self.eta.skipped(&key);
                     bar.inc(1);
                 } else if self.progress.started.get(&key).copied().unwrap_or(0) >= MAX_CUT_OFFS {
                     let reason = format!(
@@ -315,10 +315,10 @@ impl Matrix<'_> {
                     );
                     bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
                     self.skip(scene_name, structure, variant, "error", &reason)?;
-                    self.eta.skipped(structure);
+                    self.eta.skipped(&key);
                     bar.inc(1);
                 } else {
-                    pending.push((structure, p, variant, i));
+                    pending.push((structure, c.params.clone(), variant, c.index));
                 }
             }
             let matrix = pending;
@@ -342,14 +342,15 @@ impl Matrix<'_> {
                     k.cases = matrix.len();
                     k.part = self.part.map(String::from);
                     self.out.push_skipped(k)?;
-                    for (structure, ..) in &matrix {
-                        self.eta.skipped(structure);
+                    for &(.., i) in &matrix {
+                        self.eta.skipped(&(part_name.clone(), i));
                     }
                     bar.inc(matrix.len() as u64);
                     continue;
                 }
             };
             let load_ms = ms_since(t);
+            self.eta.loaded(scene_name, scene.triangle_count() as u64);
             if scene.dropped.total() > 0 {
                 let d = scene.dropped;
                 bar.suspend(|| {
@@ -404,8 +405,8 @@ impl Matrix<'_> {
                         self.skip(scene_name, structure, variant, "panic", &reason)?;
                     }
                 }
-                self.eta.done(structure, case_started.elapsed().as_secs_f64());
-                bar.set_prefix(self.eta.label());
+                self.eta.done(&(part_name.clone(), i), case_started.elapsed().as_secs_f64());
+                self.countdown.set(self.eta.left_s(self.run_started.elapsed().as_secs_f64()));
                 bar.inc(1);
             }
         }
@@ -484,6 +485,30 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
         (_, Some(s)) => s.clone(),
         _ => "(no message)".into(),
     }
+}
+
+/// A case as the plan lays it out, before it runs.
+struct PlannedCase<'a> {
+    scene: &'a str,
+    structure: &'a str,
+    params: Params,
+    variant: Option<String>,
+    /// Its place in the part's matrix: scenes in order, each scene's structures and their variants.
+    index: u64,
+}
+
+/// The part's cases in the order they run.
+fn planned_cases<'a>(plan: &'a Plan, params: &Params) -> Vec<PlannedCase<'a>> {
+    let mut cases = Vec::new();
+    for scene in &plan.scenes {
+        for structure in &plan.structures {
+            for (params, variant) in variants(plan, params, structure) {
+                let index = cases.len() as u64;
+                cases.push(PlannedCase { scene, structure, params, variant, index });
+            }
+        }
+    }
+    cases
 }
 
 /// The parameter sets one structure is measured with, each with its variant label: one per

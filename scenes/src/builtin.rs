@@ -125,11 +125,34 @@ pub fn subdivision(name: &str) -> Option<(&str, u32)> {
     })
 }
 
-/// The triangle count of a scene whose name says it before anything is generated: `grass-<N>`,
-/// and `@sub<k>` of such a scene (4^k times as many); `None` for every other scene.
+/// Triangles of the built-in scenes as they load (degenerate and duplicated triangles dropped),
+/// known before any is read or generated; a test loads each and checks. `grass-<N>` is not here:
+/// its name says its count.
+const BUILTIN_TRIANGLES: &[(&str, u64)] = &[
+    ("bunny", 3_674),
+    ("teapot", 992),
+    ("dragon-11k", 10_600),
+    ("dragon-48k", 46_540),
+    ("dragon-203k", 201_031),
+    ("dragon", 871_306),
+    ("stadium", 3_346),
+    ("terrain", 131_072),
+    ("menger", 36_096),
+    ("mandelbulb", 160_948),
+    ("city", 39_206),
+    ("flat", 20_000),
+    ("room", 2_148),
+];
+
+/// The triangle count of a scene known before anything is read or generated: a built-in scene,
+/// `grass-<N>`, and `@sub<k>` of such a scene (4^k times as many); `None` for every other scene
+/// (files, animations).
 pub fn estimated_triangles(name: &str) -> Option<u64> {
     if let Some((base, k)) = subdivision(name) {
         return estimated_triangles(base).map(|n| n.saturating_mul(4u64.pow(k)));
+    }
+    if let Some(&(_, n)) = BUILTIN_TRIANGLES.iter().find(|(scene, _)| *scene == name) {
+        return Some(n);
     }
     name.strip_prefix("grass-").and_then(parse_count).map(|n| n as u64)
 }
@@ -234,6 +257,16 @@ mod tests {
         assert_eq!(sub.name, "teapot@sub1");
         assert_eq!(sub.objects.iter().map(|o| o.triangle_count as usize).sum::<usize>(), sub.triangle_count());
         assert!(load_scene("teapot@x2").is_err() && load_scene("teapot@sub9").is_err());
+    }
+
+    #[test]
+    fn every_builtin_scene_loads_with_the_triangles_estimated_for_it() {
+        for &name in BUILTIN_SCENES.iter().chain(&["grass-2500", "teapot@sub1"]) {
+            let scene = load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(estimated_triangles(name), Some(scene.triangle_count() as u64), "{name}");
+        }
+        assert_eq!(estimated_triangles("kitchen-anim"), None);
+        assert_eq!(estimated_triangles("a/file.obj"), None);
     }
 
     #[test]
