@@ -83,10 +83,16 @@ pub fn snapshot(wall_s: f64) -> BTreeMap<String, f64> {
     out
 }
 
-/// One line for the end of a run: "timed 310 s, untimed 107 s (0.35×): reports 40 s, …".
+/// One line for the end of a run: "timed work 310.0 s, everything else 107.0 s (0.35× the timed
+/// work): counting passes 40.0 s, …".
 pub fn summary(wall_s: f64) -> String {
     let seconds = SECONDS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone();
-    let timed: f64 = seconds.iter().filter(|(p, _)| p.timed()).map(|(_, s)| s).sum();
+    summary_of(&seconds, wall_s)
+}
+
+fn summary_of(seconds: &BTreeMap<Phase, f64>, wall_s: f64) -> String {
+    // `+ 0.0`: an empty sum of floats is -0.0.
+    let timed: f64 = seconds.iter().filter(|(p, _)| p.timed()).map(|(_, s)| s).sum::<f64>() + 0.0;
     let untimed = (wall_s - timed).max(0.0);
     let mut rest: Vec<(&str, f64)> = seconds.iter().filter(|(p, _)| !p.timed()).map(|(p, s)| (p.name(), *s)).collect();
     let other = wall_s - seconds.values().sum::<f64>();
@@ -94,5 +100,25 @@ pub fn summary(wall_s: f64) -> String {
     rest.sort_by(|a, b| b.1.total_cmp(&a.1));
     let parts: Vec<String> = rest.iter().filter(|(_, s)| *s >= 0.05).map(|(n, s)| format!("{n} {s:.1} s")).collect();
     let ratio = if timed > 0.0 { format!(" ({:.2}× the timed work)", untimed / timed) } else { String::new() };
-    format!("timed work {timed:.1} s, everything else {untimed:.1} s{ratio}: {}", parts.join(", "))
+    let parts = if parts.is_empty() { String::new() } else { format!(": {}", parts.join(", ")) };
+    format!("timed work {timed:.1} s, everything else {untimed:.1} s{ratio}{parts}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_names_each_phase_by_its_share_and_nothing_when_nothing_ran() {
+        let seconds: BTreeMap<Phase, f64> =
+            [(Phase::TimedRenders, 8.0), (Phase::TimedBuilds, 2.0), (Phase::Counting, 1.5), (Phase::Images, 0.5)]
+                .into_iter()
+                .collect();
+        assert_eq!(
+            summary_of(&seconds, 13.0),
+            "timed work 10.0 s, everything else 3.0 s (0.30× the timed work): counting passes 1.5 s, other 1.0 s, \
+             images 0.5 s"
+        );
+        assert_eq!(summary_of(&BTreeMap::new(), 0.01), "timed work 0.0 s, everything else 0.0 s");
+    }
 }

@@ -207,12 +207,12 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
     let wall_s = started.elapsed().as_secs_f64();
     out.results.phases_s = phases::snapshot(wall_s);
     out.write_summary()?;
-    eprintln!("accel-bench: {} cases in {wall_s:.1} s; results in {}", out.results.cases.len(), out.dir.display());
+    eprintln!("accel-bench: {} in {wall_s:.1} s; results in {}", n_cases(out.results.cases.len()), out.dir.display());
     eprintln!("accel-bench: {}", phases::summary(wall_s));
     let skipped = &out.results.skipped;
     if !skipped.is_empty() {
         let count: usize = skipped.iter().map(|k| k.cases).sum();
-        eprintln!("accel-bench: {count} cases did not run:");
+        eprintln!("accel-bench: {} did not run:", n_cases(count));
         for k in skipped.iter().take(LISTED_SKIPS) {
             eprintln!("  {} {} [{}]: {}", k.scene, k.structure, k.kind, k.reason);
         }
@@ -227,7 +227,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
     // is not the run's failure; anything else is a failure to report.
     let failed: usize = skipped.iter().filter(|k| k.kind != "budget" && k.kind != "unavailable").map(|k| k.cases).sum();
     if failed > 0 {
-        bail!("{failed} cases failed (listed above, in results.json's `skipped` and in the report)");
+        bail!("{} failed (listed above, in results.json's `skipped` and in the report)", n_cases(failed));
     }
     Ok(())
 }
@@ -435,7 +435,7 @@ fn load_scene_alone(name: &str, budget: &Budget) -> Result<Scene> {
         let triangles = base.triangle_count() as u64;
         let bytes = triangles.saturating_mul(4u64.pow(k)).saturating_mul(budget::SCENE_BYTES_PER_TRIANGLE);
         budget.check(format!("scene '{name}' ({triangles} × 4^{k} triangles)"), bytes, hint)?;
-        return scenes::builtin::subdivided(base, name, k).with_context(|| format!("scene '{name}'"));
+        return scenes::builtin::subdivided(base, name, k).map_err(|e| named(name, e));
     }
     // A scene file is weighed by its size before it is read, and read within what the budget
     // allows (an `.obj.gz` can expand past any estimate: it is cut off there).
@@ -452,8 +452,20 @@ fn load_scene_alone(name: &str, budget: &Budget) -> Result<Scene> {
             budget.check(format!("loading {path}: {what}"), needed, hint)?;
             bail!("{path}: {what} passes the {limit} bytes the memory budget allows")
         }
-        loaded => loaded.with_context(|| format!("scene '{name}'")),
+        loaded => loaded.map_err(|e| named(name, e)),
     }
+}
+
+/// "1 case", "2 cases".
+fn n_cases(n: usize) -> String {
+    if n == 1 { "1 case".into() } else { format!("{n} cases") }
+}
+
+/// A scene's error, naming the scene once: the loaders' messages mostly begin with the file.
+fn named(name: &str, e: scenes::SceneError) -> anyhow::Error {
+    let named = e.to_string().contains(name);
+    let e = anyhow::Error::new(e);
+    if named { e } else { e.context(format!("scene '{name}'")) }
 }
 
 /// How a case that did not run is listed: `budget` (refused to fit), `unavailable` (needs what the
