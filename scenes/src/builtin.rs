@@ -125,9 +125,23 @@ pub fn subdivision(name: &str) -> Option<(&str, u32)> {
     })
 }
 
+/// A scene generator taking its triangle count and seed.
+type Generate = fn(usize, u64) -> Scene;
+
+/// The scene families named by their triangle count, `<family>-<N>`: random slivers (ORG's Fig. 1).
+const SLIVER_FAMILIES: [(&str, Generate); 2] = [("grass", procedural::grass), ("blades", procedural::blades)];
+
+/// `grass-10k` → (`grass`, `10k`, its generator).
+fn sliver_family(name: &str) -> Option<(&'static str, &str, Generate)> {
+    SLIVER_FAMILIES.iter().find_map(|&(family, generate)| {
+        let count = name.strip_prefix(family)?.strip_prefix('-')?;
+        Some((family, count, generate))
+    })
+}
+
 /// Triangles of the built-in scenes as they load (degenerate and duplicated triangles dropped),
-/// known before any is read or generated; a test loads each and checks. `grass-<N>` is not here:
-/// its name says its count.
+/// known before any is read or generated; a test loads each and checks. `grass-<N>` and
+/// `blades-<N>` are not here: their names say their counts.
 const BUILTIN_TRIANGLES: &[(&str, u64)] = &[
     ("bunny", 3_674),
     ("teapot", 992),
@@ -145,7 +159,7 @@ const BUILTIN_TRIANGLES: &[(&str, u64)] = &[
 ];
 
 /// The triangle count of a scene known before anything is read or generated: a built-in scene,
-/// `grass-<N>`, and `@sub<k>` of such a scene (4^k times as many); `None` for every other scene
+/// `grass-<N>` and `blades-<N>`, and `@sub<k>` of such a scene (4^k times as many); `None` for every other scene
 /// (files, animations).
 pub fn estimated_triangles(name: &str) -> Option<u64> {
     if let Some((base, k)) = subdivision(name) {
@@ -154,7 +168,7 @@ pub fn estimated_triangles(name: &str) -> Option<u64> {
     if let Some(&(_, n)) = BUILTIN_TRIANGLES.iter().find(|(scene, _)| *scene == name) {
         return Some(n);
     }
-    name.strip_prefix("grass-").and_then(parse_count).map(|n| n as u64)
+    sliver_family(name).and_then(|(_, count, _)| parse_count(count)).map(|n| n as u64)
 }
 
 /// `kitchen-anim` → the animation of [`DEFAULT_FRAMES`] frames, as its frame 0; `kitchen-anim@f<t>`
@@ -192,12 +206,14 @@ fn load_unmodified(name: &str, max_bytes: u64) -> Result<Scene, SceneError> {
     if let Some(frame) = animation_frame(name) {
         return frame;
     }
-    if let Some(count) = name.strip_prefix("grass-") {
+    if let Some((family, count, generate)) = sliver_family(name) {
         let n = parse_count(count).ok_or_else(|| SceneError::UnknownScene {
             name: name.into(),
-            detail: format!("'{count}' is not a triangle count (expected e.g. grass-1k, grass-10k, grass-2500)"),
+            detail: format!(
+                "'{count}' is not a triangle count (expected e.g. {family}-1k, {family}-10k, {family}-2500)"
+            ),
         })?;
-        return Ok(procedural::grass(n, DEFAULT_SEED));
+        return Ok(generate(n, DEFAULT_SEED));
     }
     let seed = DEFAULT_SEED;
     match name {
@@ -215,7 +231,7 @@ fn load_unmodified(name: &str, max_bytes: u64) -> Result<Scene, SceneError> {
         _ => Err(SceneError::UnknownScene {
             name: name.into(),
             detail: format!(
-                "not a built-in scene ({}, grass-<N>), an animated scene ({}, each with an optional @f<frame>) \
+                "not a built-in scene ({}, grass-<N>, blades-<N>), an animated scene ({}, each with an optional @f<frame>) \
                  nor a path ending in .obj, .obj.gz, .gltf or .glb",
                 BUILTIN_SCENES.join(", "),
                 ANIMATED_SCENES.join(", ")
@@ -261,7 +277,7 @@ mod tests {
 
     #[test]
     fn every_builtin_scene_loads_with_the_triangles_estimated_for_it() {
-        for &name in BUILTIN_SCENES.iter().chain(&["grass-2500", "teapot@sub1"]) {
+        for &name in BUILTIN_SCENES.iter().chain(&["grass-2500", "blades-1k", "teapot@sub1"]) {
             let scene = load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert_eq!(estimated_triangles(name), Some(scene.triangle_count() as u64), "{name}");
         }

@@ -18,10 +18,11 @@ fn tetrahedron() -> Mesh {
     mesh
 }
 
-/// Every scene at its built-in parameters, except grass at 1000 and a smaller Mandelbulb.
+/// Every scene at its built-in parameters, except grass and blades at 1000 and a smaller Mandelbulb.
 fn all_scenes(seed: u64) -> Vec<Scene> {
     vec![
         grass(1000, seed),
+        blades(1000, seed),
         stadium(&tetrahedron(), seed),
         terrain(seed),
         menger(MENGER_LEVEL),
@@ -75,9 +76,10 @@ fn every_scene_validates_and_its_objects_partition_the_triangles_and_closed_ones
 #[test]
 fn scene_names_match_the_command_line() {
     let names: Vec<String> = all_scenes(SEED).into_iter().map(|s| s.name).collect();
-    assert_eq!(names, ["grass-1k", "stadium", "terrain", "menger", "mandelbulb", "city", "flat", "room"]);
+    assert_eq!(names, ["grass-1k", "blades-1k", "stadium", "terrain", "menger", "mandelbulb", "city", "flat", "room"]);
     assert_eq!(grass(12_345, 1).name, "grass-12345");
     assert_eq!(grass(1_000_000, 1).name, "grass-1000k");
+    assert_eq!(blades(2500, 1).name, "blades-2500");
 }
 
 #[test]
@@ -92,22 +94,41 @@ fn procedural_scenes_are_deterministic_and_seeded() {
     }
 }
 
+/// Each sliver family: exactly `n` triangles in the unit cube, each an isosceles sliver whose
+/// length and width ratio lie in the family's ranges, and (over 10K) spanning nearly all of them.
 #[test]
-fn grass_has_exactly_n_thin_triangles_in_the_unit_cube() {
-    for n in [1000, 10_000, 12_345] {
-        let scene = grass(n, SEED);
-        assert_eq!(scene.triangle_count(), n);
-        let bounds = scene.bounds();
-        assert!(
-            bounds.min.cmpge(Vec3::splat(-1e-6)).all() && bounds.max.cmple(Vec3::splat(1.0 + 1e-6)).all(),
-            "{bounds:?}"
-        );
-        assert_eq!(scene.mesh.degenerate_count(), 0);
-        for t in 0..n {
-            let [a, b, c] = scene.mesh.triangle(t);
-            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-            let width = (b - a).cross(c - a).length() / longest; // the altitude onto the longest side
-            assert!(width < 0.06 * longest && longest >= 0.9 * grass::MIN_LENGTH, "triangle {t} is not a thin blade");
+fn sliver_families_have_exactly_n_slivers_of_their_stated_shape() {
+    for (kind, make) in [(&grass::GRASS, grass as fn(usize, u64) -> Scene), (&grass::BLADES, blades)] {
+        for n in [1000, 10_000, 12_345] {
+            let scene = make(n, SEED);
+            assert_eq!(scene.triangle_count(), n, "{}", scene.name);
+            let bounds = scene.bounds();
+            assert!(
+                bounds.min.cmpge(Vec3::splat(-1e-6)).all() && bounds.max.cmple(Vec3::splat(1.0 + 1e-6)).all(),
+                "{}: {bounds:?}",
+                scene.name
+            );
+            assert_eq!(scene.mesh.degenerate_count(), 0);
+            let (mut lengths, mut ratios) = ((f32::MAX, 0.0f32), (f32::MAX, 0.0f32));
+            for t in 0..n {
+                let [a, b, c] = scene.mesh.triangle(t);
+                // The base is the shortest side; the length is the apex's height over it.
+                let sides = [(b - a).length(), (c - b).length(), (a - c).length()];
+                let base = sides.iter().copied().fold(f32::MAX, f32::min);
+                let length = (b - a).cross(c - a).length() / base;
+                let ratio = base / length;
+                let (lo, hi) = kind.length;
+                assert!(length > 0.999 * lo && length < 1.001 * hi, "{} triangle {t}: length {length}", scene.name);
+                let (lo, hi) = kind.width_ratio;
+                assert!(ratio > 0.99 * lo && ratio < 1.01 * hi, "{} triangle {t}: width ratio {ratio}", scene.name);
+                lengths = (lengths.0.min(length), lengths.1.max(length));
+                ratios = (ratios.0.min(ratio), ratios.1.max(ratio));
+            }
+            if n >= 10_000 {
+                let spans = |(lo, hi): (f32, f32), seen: (f32, f32)| seen.0 < lo * 1.05 && seen.1 > hi * 0.95;
+                assert!(spans(kind.length, lengths), "{}: lengths {lengths:?}", scene.name);
+                assert!(spans(kind.width_ratio, ratios), "{}: width ratios {ratios:?}", scene.name);
+            }
         }
     }
 }
