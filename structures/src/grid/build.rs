@@ -135,7 +135,7 @@ pub fn estimate_top(tris: &[Triangle], kind: GridKind) -> (u64, u64) {
 
 /// What the top grid is built from: every triangle's bounding box, their union (a point at the
 /// origin when there are none) and the list of all triangle ids.
-fn top_input(tris: &[Triangle]) -> (Vec<Aabb>, Aabb, Vec<u32>) {
+pub(super) fn top_input(tris: &[Triangle]) -> (Vec<Aabb>, Aabb, Vec<u32>) {
     let bboxes: Vec<Aabb> = tris.par_iter().map(triangle_box).collect();
     let bounds = bboxes.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
     let bounds = if bounds.is_empty() { Aabb::new(Vec3::ZERO, Vec3::ZERO) } else { bounds };

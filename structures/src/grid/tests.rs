@@ -328,3 +328,67 @@ fn a_bad_layout_is_rejected_by_name() {
     let err = build(&input, GridKind::Ug { lambda: 5.0 }).err().expect("an unknown layout").to_string();
     assert!(err.contains("ug.layout") && err.contains("blocks"), "{err}");
 }
+
+/// The parallel build lays out exactly what the sequential one does — each cell's references in
+/// input order — however the triangles are cut into chunks, with bounding-box lists and with the
+/// exact test, on more threads than this machine has.
+#[test]
+fn the_parallel_build_equals_the_sequential_one_for_any_chunking() {
+    use super::level::{Footprint, build_level, build_parallel, header};
+    let scene = scenes::load_scene("blades-2k").expect("scene loads");
+    let tris = scene.triangles();
+    let (bboxes, bounds, all) = super::build::top_input(&tris);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(4).build().expect("pool");
+    pool.install(|| {
+        for exact in [None, Some(&tris[..])] {
+            let fp = Footprint { bboxes: &bboxes, exact };
+            let h = header(bounds, [9, 7, 11], 1);
+            let sequential = build_level(h, &all, fp, false);
+            assert!(sequential.refs.len() > all.len(), "slivers span several cells");
+            for chunk in [1, 7, 500, all.len(), 1 << 20] {
+                let parallel = build_parallel(h, h.cell_count() as usize, &all, fp, chunk);
+                assert_eq!(parallel.offsets, sequential.offsets, "chunks of {chunk}, exact {}", exact.is_some());
+                assert_eq!(parallel.refs, sequential.refs, "chunks of {chunk}, exact {}", exact.is_some());
+            }
+        }
+    });
+}
+
+/// Algorithm 2's cap binds exactly where its arithmetic says: triangles whose boxes are all
+/// 0.25 on every axis in a unit-cube scene allow at most α · 1 / 0.25 = 8 cells per axis (α = 2),
+/// so at λN = 343 Algorithm 1's 7 per axis stands, and at λN = 1000 its 10 is cut to 8 — while
+/// Eq. 1 keeps 10.
+#[test]
+fn algorithm2_caps_a_scene_of_known_face_size_where_the_formula_says() {
+    let scene_of = |n: usize| {
+        let mut mesh = scenes::Mesh::new("quarters", "test");
+        // Corners on a 1/64 lattice in [0, 0.75]³, so every box is exactly 0.25 a side; the
+        // first two pin the scene's bounds to the unit cube.
+        let mut state = 12345u64;
+        for i in 0..n {
+            let p = match i {
+                0 => Vec3::ZERO,
+                1 => Vec3::splat(0.75),
+                _ => Vec3::from_array([0; 3].map(|_| {
+                    state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    ((state >> 33) % 49) as f32 / 64.0
+                })),
+            };
+            let first = mesh.positions.len() as u32;
+            mesh.positions.extend([p, p + Vec3::new(0.25, 0.25, 0.0), p + Vec3::new(0.0, 0.25, 0.25)]);
+            mesh.indices.push([first, first + 1, first + 2]);
+        }
+        scenes::Scene::from_mesh("quarters", mesh)
+    };
+    let one_level = Params::parse(["org.max_depth=1"]).expect("parses");
+    for (n, org_res, ug_res) in [(343, 7, 7), (1000, 8, 10)] {
+        let scene = scene_of(n);
+        assert_eq!(scene.bounds(), Aabb::new(Vec3::ZERO, Vec3::ONE));
+        let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &one_level };
+        let org = build(&input, GridKind::ORG_PAPER).expect("org builds");
+        assert_eq!(org.headers.len(), 1, "one level");
+        assert_eq!(org.headers[0].res, [org_res; 3], "ORG at N = {n}");
+        let ug = build(&input, GridKind::Ug { lambda: 1.0 }).expect("ug builds");
+        assert_eq!(ug.headers[0].res, [ug_res; 3], "Eq. 1 at N = {n}");
+    }
+}
