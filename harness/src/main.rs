@@ -128,7 +128,9 @@ fn list(what: ListWhat) {
             "  ci         every built-in scene but dragon and dragon-203k, every structure but embree, at 256×256, one thread (the CI gate)"
         );
         println!("  default    every built-in scene at 512×512, every structure (the default)");
-        println!("  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on grass-1k…100k");
+        println!(
+            "  org-fig1   seed 002 Fig. 1: ug (Eq. 1) vs one-level org (Alg. 2) on blades-1k…100k and grass-1k…100k"
+        );
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");
         println!("  org-table1 seed 002 Table 1: org, ug, rg, rg2, bvh on every built-in scene at 500×500");
         println!(
