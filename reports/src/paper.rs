@@ -387,8 +387,11 @@ impl Scaling {
     };
 }
 
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Row {
+    /// (cells, references) per grid level, top first, of the baseline and the method (empty where
+    /// the case does not record its levels).
+    levels: [Vec<(f64, f64)>; 2],
     n: f64,
     cells: [f64; 2],
     pointers: [f64; 2],
@@ -411,6 +414,7 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
         .filter_map(|scene| {
             let (b, m) = (find(scene, s.baseline.0)?, find(scene, s.method.0)?);
             let row = Row {
+                levels: [level_cells(b), level_cells(m)],
                 n: b.triangles as f64,
                 cells: [b.memory.nodes as f64, m.memory.nodes as f64],
                 pointers: [b.memory.pointers as f64, m.memory.pointers as f64],
@@ -491,7 +495,7 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
     );
     let _ = writeln!(out);
     for f in other_families {
-        let rows: Vec<Row> = others.iter().filter(|(scene, _)| family(scene) == f).map(|(_, r)| *r).collect();
+        let rows: Vec<Row> = others.iter().filter(|(scene, _)| family(scene) == f).map(|(_, r)| r.clone()).collect();
         if rows.len() < 2 {
             continue;
         }
@@ -499,6 +503,44 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
         scaling_table(&mut out, &rows, &s);
     }
     out
+}
+
+/// A grid case's (cells, references) per level, top first, from its recorded `levels`.
+fn level_cells(case: &Case) -> Vec<(f64, f64)> {
+    let levels = case.params.get("levels").and_then(|l| l.as_array());
+    let level = |l: &serde_json::Value| Some((l.get("cells")?.as_f64()?, l.get("refs")?.as_f64()?));
+    levels.map_or_else(Vec::new, |l| l.iter().filter_map(level).collect())
+}
+
+/// Where the cells are: each level's cells per triangle, for both structures, so a growth
+/// exponent above 1 can be traced to levels that appear or fill up as N grows.
+fn levels_table(out: &mut Sheet, rows: &[Row], s: &Scaling) {
+    if rows.iter().all(|r| r.levels.iter().all(Vec::is_empty)) {
+        return;
+    }
+    let (bl, ml) = (s.baseline.1, s.method.1);
+    let _ = writeln!(
+        out,
+        "\nCells, and references stored in cells not subdivided further, per triangle by level, top \
+         first (the paper's β rule means to keep each level near λ·N cells):\n"
+    );
+    let _ = writeln!(out, "| N | cells {bl} | leaf refs {bl} | cells {ml} | leaf refs {ml} |\n|---:|---|---|---|---|");
+    let per_triangle = |levels: &[(f64, f64)], n: f64, which: fn(&(f64, f64)) -> f64| -> String {
+        let shown: Vec<String> = levels.iter().map(|l| format!("{:.2}", which(l) / n)).collect();
+        if shown.is_empty() { "—".into() } else { shown.join(", ") }
+    };
+    for r in rows {
+        let [b, m] = &r.levels;
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} |",
+            r.n,
+            per_triangle(b, r.n, |l| l.0),
+            per_triangle(b, r.n, |l| l.1),
+            per_triangle(m, r.n, |l| l.0),
+            per_triangle(m, r.n, |l| l.1)
+        );
+    }
 }
 
 /// The rows' table, a note on where Algorithm 2's cap binds (Fig. 1), and the fitted exponents,
@@ -527,6 +569,8 @@ fn scaling_table(out: &mut Sheet, rows: &[Row], s: &Scaling) -> [(&'static str, 
             format!("Algorithm 2's cap binds (fewer cells than Eq. 1) at N = {}", binds.join(", "))
         };
         let _ = writeln!(out, "\n{note}.");
+    } else {
+        levels_table(out, rows, s);
     }
     let fit = |f: &dyn Fn(&Row) -> f64| growth_exponent(&rows.iter().map(|r| (r.n, f(r))).collect::<Vec<_>>());
     let exps = [
@@ -896,6 +940,29 @@ mod tests {
         assert_eq!(sheet.claims.len(), 5);
         assert!(sheet.claims.iter().any(|c| !c.held), "{}", sheet.markdown);
         assert!(!sheet.markdown.contains("stress case"), "{}", sheet.markdown);
+    }
+
+    /// Fig. 2 shows where the cells are: each level's cells and leaf references per triangle.
+    #[test]
+    fn fig2_lists_cells_and_leaf_references_per_level() {
+        let levels = |l: &[(u64, u64)]| {
+            let l: Vec<_> =
+                l.iter().map(|&(cells, refs)| serde_json::json!({ "cells": cells, "refs": refs })).collect();
+            serde_json::json!({ "levels": l })
+        };
+        let mut cases = Vec::new();
+        for (n, org) in
+            [(1000u64, vec![(1000, 500), (2000, 4000)]), (4000, vec![(4000, 400), (8000, 16000), (400, 800)])]
+        {
+            let mut rg = fig1_case("dragon", n, "rg", n * 3, n * 10, n as f64, 10.0);
+            rg.params = levels(&[(n, n), (2 * n, 9 * n)]);
+            let mut m = fig1_case("dragon", n, "org", org.iter().map(|l| l.0).sum(), n * 5, n as f64, 10.0);
+            m.params = levels(&org);
+            cases.extend([rg, m]);
+        }
+        let text = scaling(&Results { cases, ..Results::default() }, Scaling::FIG2).markdown;
+        assert!(text.contains("| 4000 | 1.00, 2.00 | 1.00, 9.00 | 1.00, 2.00, 0.10 | 0.10, 4.00, 0.20 |"), "{text}");
+        assert!(!text.contains("cap binds"), "Fig. 1's note only: {text}");
     }
 
     #[test]
