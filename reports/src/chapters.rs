@@ -100,7 +100,9 @@ pub fn glance(chapters: &[Chapter]) -> String {
         out,
         "Every claim this run checks, one row per claim with each subject it was checked on (✓ held, ✗ not). \
          *paper* rows are the seeds' claims (DESIGN.md §9), *target* rows an issue's goal for our implementation. \
-         {held} of {} claims held on every subject. Each links to its table.\n",
+         {held} of {} claims held on every subject. Each links to its table. A claim marked *not like with like* \
+         sets our figure beside one measured under other conditions (another processor, another counting \
+         convention), and says which; every other claim compares like with like.\n",
         rows.len()
     );
     out.push_str("| result | claim | paper or target | ours | verdict |\n|---|---|---|---|---|\n");
@@ -125,12 +127,18 @@ pub fn glance(chapters: &[Chapter]) -> String {
             None => format!("**held**{}", verdict.strip_prefix("held").unwrap_or_default()),
         };
         let first = row.checks[0].0;
+        let unlike = row.unlike();
+        let claim = if unlike.is_empty() {
+            row.claim.to_string()
+        } else {
+            format!("{} *(not like with like: {unlike})*", row.claim)
+        };
         let _ = writeln!(
             out,
             "| [{}](#{}) | {} | {}: {} | {} | {verdict} |",
             cell(row.source),
             row.anchor,
-            cell(row.claim),
+            cell(&claim),
             first.expectation(),
             cell(&row.expected()),
             cell(&ours.join("; ")),

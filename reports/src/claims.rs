@@ -22,14 +22,18 @@ pub struct Claim {
     pub held: bool,
     /// The heading of the table the claim sits under, as written in the section's Markdown.
     pub table: String,
+    /// Why our figure and the expected one are not like with like (measured on other hardware,
+    /// counted by another convention), where they are not; `None` for a like-with-like check.
+    pub unlike: Option<String>,
 }
 
 impl Claim {
     /// The claim as the reproduction's Markdown bullet, ending in the verdict.
     pub fn line(&self) -> String {
         let subject = if self.subject.is_empty() { String::new() } else { format!("{}: ", self.subject) };
+        let unlike = self.unlike.as_ref().map_or(String::new(), |why| format!(" — not like with like: {why}"));
         format!(
-            "- {subject}{}: ours {} ({}: {}): {}",
+            "- {subject}{}: ours {} ({}: {}): {}{unlike}",
             self.claim,
             self.ours,
             self.expectation(),
@@ -83,6 +87,19 @@ impl Sheet {
         self.markdown.push('\n');
     }
 
+    /// [`Sheet::claim`] for a check whose two figures are not like with like, saying why (e.g.
+    /// our CPU build against a published GPU-assisted one): the verdict stands, marked as such
+    /// here and in the glance table.
+    pub fn claim_unlike(&mut self, check: Check, why: &str) {
+        self.record(check);
+        let line = self.claims.last_mut().map(|claim| {
+            claim.unlike = Some(why.to_string());
+            claim.line()
+        });
+        self.markdown.push_str(&line.unwrap_or_default());
+        self.markdown.push('\n');
+    }
+
     /// Records a claim under the last heading written, without a line of its own: for a verdict
     /// the table already shows in a column of its row.
     pub fn record(&mut self, check: Check) -> Claim {
@@ -94,6 +111,7 @@ impl Sheet {
             ours: check.ours,
             held: check.held,
             table: last_heading(&self.markdown).unwrap_or_default().to_string(),
+            unlike: None,
         };
         self.claims.push(claim.clone());
         claim
@@ -193,6 +211,17 @@ impl Row<'_> {
         }
     }
 
+    /// Why the row's figures are not like with like, repeated reasons once; empty when they are.
+    pub fn unlike(&self) -> String {
+        let mut seen: Vec<&str> = Vec::new();
+        for why in self.checks.iter().filter_map(|(c, _)| c.unlike.as_deref()) {
+            if !seen.contains(&why) {
+                seen.push(why);
+            }
+        }
+        seen.join("; ")
+    }
+
     /// The expectations of the row's checks, repeated ones once.
     pub fn expected(&self) -> String {
         let mut seen: Vec<&str> = Vec::new();
@@ -249,6 +278,21 @@ mod tests {
         assert_eq!(sheet.claims[0].table, "Table 1 — nodes");
         let target = Claim { source: "issue 13".into(), ..sheet.claims[0].clone() };
         assert!(target.line().contains("(target: 1/11 … 1/135)"));
+    }
+
+    #[test]
+    fn a_claim_not_like_with_like_says_why_in_its_line_and_its_row() {
+        let mut sheet = Sheet::default();
+        let _ = writeln!(sheet, "### Table 4\n");
+        sheet.claim(check("room", true));
+        sheet.claim_unlike(check("city", false), "our CPU build against a GPU one");
+        assert!(sheet.markdown.ends_with("**not held** — not like with like: our CPU build against a GPU one\n"));
+        assert_eq!(sheet.claims[0].unlike, None);
+        let claims: Vec<(String, String, Claim)> =
+            sheet.claims.iter().map(|c| (String::new(), String::new(), c.clone())).collect();
+        let rows = rows(&claims);
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0].unlike(), "our CPU build against a GPU one");
     }
 
     #[test]
