@@ -23,7 +23,8 @@ mod validate;
 
 use std::sync::Arc;
 
-use scenes::Triangle;
+use glam::Vec3;
+use scenes::{Aabb, Triangle};
 use serde::Serialize;
 
 use crate::bvh4::layout::{Tri4, WIDTH};
@@ -303,8 +304,16 @@ impl Structure for Grid {
     }
 
     fn params(&self) -> serde_json::Value {
+        // The top grid, and how many of its cells a face's box spans on each axis on average
+        // (LF_avg_i over the cell size: what sets the references per face, seed 002 §1.2).
+        let top = self.headers.first();
+        let n = self.triangles.len().max(1) as f32;
+        let mean_box = self.triangles.iter().map(|t| Aabb::from_points(t.iter().copied()).extent()).sum::<Vec3>() / n;
+        let face_cells = top.map(|h| [0, 1, 2].map(|a| mean_box[a] / h.cell_size[a].max(f32::MIN_POSITIVE)));
         serde_json::json!({
             "grid": self.kind,
+            "top_res": top.map(|h| h.res),
+            "face_cells": face_cells,
             "triangle_cell_test": match self.kind.cell_test() {
                 CellTest::Bbox => "bounding box",
                 CellTest::Sat => "separating axis (exact)",

@@ -93,6 +93,14 @@ fn org_top_level_follows_algorithm2_and_subgrids_respect_gamma() {
     let mean = tris.iter().map(|t| Aabb::from_points(t.iter().copied()).extent()).sum::<Vec3>() / tris.len() as f32;
     let expected = algorithm2(scene.bounds().extent(), tris.len() as f64, 2.0, mean);
     assert_eq!(g.headers[0].res, expected);
+    // The build's record: the top resolution, and a face's mean box in top cells.
+    let params = crate::Structure::params(&g);
+    assert_eq!(params["top_res"], serde_json::json!(expected));
+    for a in 0..3 {
+        let recorded = params["face_cells"][a].as_f64().expect("face_cells");
+        let cells = f64::from(mean[a] / g.headers[0].cell_size[a]);
+        assert!((recorded - cells).abs() < 1e-4 * cells.max(1.0), "axis {a}: {recorded} against {cells}");
+    }
     // The teapot in the stadium is the case hierarchy exists for.
     let (_, g) = grid("stadium", org);
     assert!(g.headers.len() > 1, "the stadium subdivides");
