@@ -69,6 +69,9 @@ pub struct Eta<K> {
     all: Done,
     /// Seconds the cases done took.
     seconds: f64,
+    /// When the run (this session of it) started, and the estimate the progress bar shows.
+    started: Instant,
+    countdown: Countdown,
 }
 
 impl<K: Ord> Eta<K> {
@@ -79,7 +82,21 @@ impl<K: Ord> Eta<K> {
             .values()
             .filter_map(|c| Some((c.scene.clone(), ln_size(scenes::builtin::estimated_triangles(&c.scene)?))))
             .collect();
-        Self { pending, sizes, by_kind: BTreeMap::new(), by_structure: BTreeMap::new(), all: Vec::new(), seconds: 0.0 }
+        Self {
+            pending,
+            sizes,
+            by_kind: BTreeMap::new(),
+            by_structure: BTreeMap::new(),
+            all: Vec::new(),
+            seconds: 0.0,
+            started: Instant::now(),
+            countdown: Countdown::default(),
+        }
+    }
+
+    /// The countdown this estimate sets after each case, for the progress bar to show.
+    pub fn countdown(&self) -> Countdown {
+        self.countdown.clone()
     }
 
     /// `scene` has loaded with `triangles` triangles.
@@ -96,7 +113,7 @@ impl<K: Ord> Eta<K> {
         })
     }
 
-    /// Case `key` took `seconds`.
+    /// Case `key` took `seconds`; the countdown restarts from the new estimate.
     pub fn done(&mut self, key: &K, seconds: f64) {
         let Some(case) = self.pending.remove(key) else { return };
         let point = (self.size(&case.scene), seconds);
@@ -104,6 +121,7 @@ impl<K: Ord> Eta<K> {
         self.by_structure.entry(case.structure).or_default().push(point);
         self.all.push(point);
         self.seconds += seconds;
+        self.countdown.set(self.left_s(self.started.elapsed().as_secs_f64()));
     }
 
     /// Case `key` costs no time: kept from an interrupted run, or not run.

@@ -23,7 +23,7 @@ use crate::agreement;
 use crate::alloc;
 use crate::budget::{self, Budget, BudgetError};
 use crate::cli::{Backend, PartPlan, Plan, RunArgs};
-use crate::eta::{Countdown, Eta, EtaCase};
+use crate::eta::{Eta, EtaCase};
 use crate::gpu;
 use crate::images;
 use crate::machine;
@@ -161,8 +161,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
     }
     let cases = planned.len() as u64;
     let mut eta = Eta::new(planned);
-    let countdown = Countdown::default();
-    let left = countdown.clone();
+    let left = eta.countdown();
     let bar = ProgressBar::new(cases).with_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases{left}  {wide_msg}")
             .context("progress template")?
@@ -190,8 +189,6 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
             gpu,
             progress: &progress,
             eta: &mut eta,
-            run_started: started,
-            countdown: &countdown,
         };
         matrix.run()?;
         if many {
@@ -260,12 +257,8 @@ struct Matrix<'a> {
     gpu: Option<&'static GpuContext>,
     /// What an interrupted run got through (empty for a new run).
     progress: &'a Progress,
-    /// The time left, estimated after each case.
+    /// The time left, estimated after each case and shown in the bar.
     eta: &'a mut Eta<CaseKey>,
-    /// When the run (this session of it) started.
-    run_started: Instant,
-    /// The time left, shown in the bar.
-    countdown: &'a Countdown,
 }
 
 /// How far an interrupted run got: the cases it finished, and how often each was started.
@@ -302,9 +295,10 @@ impl Matrix<'_> {
             let scene_name = matrix[0].scene;
             // An interrupted run's finished cases are kept; a case cut off mid-way too often is
             // recorded as failed.
-            let mut pending = Vec::new();
+            let key = |c: &PlannedCase| (part_name.clone(), c.index);
+            let mut pending: Vec<&PlannedCase> = Vec::new();
             for c in matrix {
-                let (structure, variant, key) = (c.structure, c.variant.clone(), (part_name.clone(), c.index));
+                let (structure, key) = (c.structure, key(c));
                 if self.progress.done.contains(&key) {
                     self.eta.skipped(&key);
                     bar.inc(1);
@@ -314,11 +308,11 @@ impl Matrix<'_> {
                          not started again"
                     );
                     bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
-                    self.skip(scene_name, structure, variant, "error", &reason)?;
+                    self.skip(scene_name, structure, c.variant.clone(), "error", &reason)?;
                     self.eta.skipped(&key);
                     bar.inc(1);
                 } else {
-                    pending.push((structure, c.params.clone(), variant, c.index));
+                    pending.push(c);
                 }
             }
             let matrix = pending;
@@ -342,8 +336,8 @@ impl Matrix<'_> {
                     k.cases = matrix.len();
                     k.part = self.part.map(String::from);
                     self.out.push_skipped(k)?;
-                    for &(.., i) in &matrix {
-                        self.eta.skipped(&(part_name.clone(), i));
+                    for c in &matrix {
+                        self.eta.skipped(&key(c));
                     }
                     bar.inc(matrix.len() as u64);
                     continue;
@@ -364,9 +358,10 @@ impl Matrix<'_> {
                 });
             }
             let mut ctx = SceneRun::new(&scene, load_ms, self.gpu);
-            for (structure, params, variant, i) in matrix {
+            for c in matrix {
+                let (structure, params, variant) = (c.structure, &c.params, &c.variant);
                 let case_started = Instant::now();
-                self.out.start_case(&(part_name.clone(), i))?;
+                self.out.start_case(&key(c))?;
                 // One case's failure, a panic included, costs that case alone: it is listed with
                 // its reason and the matrix goes on.
                 let (args, out, part) = (self.args, &*self.out, self.part);
@@ -375,7 +370,7 @@ impl Matrix<'_> {
                         let level = params.get("voxel.levels", 10u32).unwrap_or(10);
                         let compare = plan.shadow_compare_level.is_none_or(|l| l == level);
                         let input = shadows::ShadowCaseInput {
-                            input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params: &params },
+                            input: BuildInput { scene: ctx.scene, triangles: ctx.triangles.clone(), params },
                             structure,
                             variant: variant.clone(),
                             load_ms: ctx.load_ms,
@@ -383,13 +378,13 @@ impl Matrix<'_> {
                         };
                         return shadows::measure(input, plan, bar, budget, compare);
                     }
-                    let case = CaseRun { structure, params: &params, variant: variant.clone(), plan, args, out, part };
+                    let case = CaseRun { structure, params, variant: variant.clone(), plan, args, out, part };
                     measure_case(&mut ctx, case, bar, budget)
                 }));
                 match attempt {
                     Ok(Ok(mut case)) => {
                         case.part = self.part.map(String::from);
-                        case.index = Some(i);
+                        case.index = Some(c.index);
                         bar.suspend(|| eprintln!("{}", one_line(&case)));
                         self.out.push_case(case)?;
                     }
@@ -397,16 +392,15 @@ impl Matrix<'_> {
                         let kind = failure_kind(&e);
                         let reason = bounded_text(&format!("{e:#}"));
                         bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
-                        self.skip(scene_name, structure, variant, kind, &reason)?;
+                        self.skip(scene_name, structure, variant.clone(), kind, &reason)?;
                     }
                     Err(panic) => {
                         let reason = bounded_text(&format!("panicked: {}", panic_message(panic.as_ref())));
                         bar.suspend(|| eprintln!("  {scene_name} {structure}: skipped: {reason}"));
-                        self.skip(scene_name, structure, variant, "panic", &reason)?;
+                        self.skip(scene_name, structure, variant.clone(), "panic", &reason)?;
                     }
                 }
-                self.eta.done(&(part_name.clone(), i), case_started.elapsed().as_secs_f64());
-                self.countdown.set(self.eta.left_s(self.run_started.elapsed().as_secs_f64()));
+                self.eta.done(&key(c), case_started.elapsed().as_secs_f64());
                 bar.inc(1);
             }
         }

@@ -7,7 +7,7 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::schema::{Case, Results};
+use crate::schema::{Case, RenderStats, Results};
 
 /// Growth exponents up to this count as linear (the issue's threshold).
 const LINEAR: f64 = 1.1;
@@ -59,7 +59,6 @@ fn esvo_scale(results: &Results) -> Sheet {
     }
     let stat = |c: &Case, key: &str| c.params["esvo"]["stats"][key].as_f64().unwrap_or(0.0);
     let lod = |c: &Case| c.params["esvo"]["params"]["lod_pixels"].as_f64().unwrap_or(0.0);
-    let primary = |c: &Case| c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary").cloned();
     let mut out = Sheet::default();
     out.push_str("## ESVO at scale — blocks, bounded-memory build, level of detail (issue 18)\n\n");
     let _ = writeln!(
@@ -88,7 +87,7 @@ fn esvo_scale(results: &Results) -> Sheet {
             .filter(|p| p.scene == c.scene && p.variant.is_none() && c.variant.is_none())
             .map_or("—".into(), |p| format!("{:.2}×", bytes / p.memory.bytes.max(1) as f64));
         let peak_ratio = c.build.peak_bytes as f64 / bytes.max(1.0);
-        let r = primary(c);
+        let r = cpu_primary(c);
         let mrays = r.as_ref().map_or("—".into(), |r| format!("{:.2}", r.mrays_per_s));
         let bvh_mrays = r
             .as_ref()
@@ -135,7 +134,7 @@ fn esvo_scale(results: &Results) -> Sheet {
             // The LOD case against the plain cases two or more levels below.
             for low in cases.iter().filter(|l| l.scene == c.scene && l.variant.is_none() && l.resolution < c.resolution)
             {
-                let low_steps = primary(low).map_or(f64::NAN, |r| r.steps_per_ray_mean);
+                let low_steps = cpu_primary(low).map_or(f64::NAN, |r| r.steps_per_ray_mean);
                 let low_level = low.resolution.unwrap_or(1).trailing_zeros();
                 if low_level == 11 {
                     claims.push(Check {
@@ -155,8 +154,8 @@ fn esvo_scale(results: &Results) -> Sheet {
         {
             // What the split costs a ray: each side's rate over its own paired bvh.
             let rel = |x: &Case| {
-                primary(x).and_then(|r| {
-                    Some(r.rays as f64 / r.timing.ms_median / (r.rays as f64 / r.reference_timing?.ms_median))
+                cpu_primary(x).and_then(|r| {
+                    Some(r.rays as f64 / r.timing.ms_median / (r.rays as f64 / r.reference_timing.as_ref()?.ms_median))
                 })
             };
             if let (Some(many), Some(single)) = (rel(c), rel(one)) {
@@ -189,7 +188,6 @@ fn esvo_scale(results: &Results) -> Sheet {
 /// empty unless a run has both.
 fn esvo_beam(results: &Results) -> Sheet {
     let beam = |c: &Case| c.params["esvo"]["params"]["beam"].as_bool();
-    let primary = |c: &Case| c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary").cloned();
     let pairs: Vec<(&Case, &Case)> = results
         .cases
         .iter()
@@ -218,7 +216,7 @@ fn esvo_beam(results: &Results) -> Sheet {
     out.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     let mut checks = Vec::new();
     for (off, on) in pairs {
-        let (Some(a), Some(b)) = (primary(off), primary(on)) else { continue };
+        let (Some(a), Some(b)) = (cpu_primary(off), cpu_primary(on)) else { continue };
         let change = b.steps_per_ray_mean / a.steps_per_ray_mean.max(f64::MIN_POSITIVE) - 1.0;
         let bvh = a.reference_timing.as_ref().map_or("—".into(), |t| format!("{:.1}", t.ms_median));
         let _ = writeln!(
@@ -359,7 +357,12 @@ pub fn growth_exponent(points: &[(f64, f64)]) -> Option<f64> {
 }
 
 pub(crate) fn cpu_render_ms(case: &Case) -> Option<f64> {
-    case.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary").map(|r| r.timing.ms_median)
+    cpu_primary(case).map(|r| r.timing.ms_median)
+}
+
+/// The case's CPU render of primary rays.
+pub(crate) fn cpu_primary(case: &Case) -> Option<&RenderStats> {
+    case.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary")
 }
 
 pub(crate) fn held(ok: bool) -> &'static str {
@@ -529,8 +532,7 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
 /// beside the other structure's (steps, and triangle tests), e.g. " (ORG 25.1 steps and 14.0
 /// tests per ray, bvh 9.0 and 3.1)"; empty for a claim held or a structure not counted.
 fn work_beside(org: &Case, other: Option<&Case>, held: bool) -> String {
-    let primary = |c: &Case| c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary").cloned();
-    match (held, primary(org), other.and_then(|c| Some((c, primary(c)?)))) {
+    match (held, cpu_primary(org), other.and_then(|c| Some((c, cpu_primary(c)?)))) {
         (false, Some(o), Some((c, r))) if c.structure != "org" && r.steps_per_ray_mean > 0.0 => format!(
             " (ORG {:.1} steps and {:.1} tests per ray, {} {:.1} and {:.1})",
             o.steps_per_ray_mean,
@@ -733,7 +735,7 @@ fn table1(results: &Results) -> Sheet {
         let _ = writeln!(out, "\n| per primary ray | steps | node/cell visits | triangle tests | Mrays/s |");
         let _ = writeln!(out, "|---|---:|---:|---:|---:|");
         for c in &cases {
-            if let Some(r) = c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary") {
+            if let Some(r) = cpu_primary(c) {
                 let _ = writeln!(
                     out,
                     "| {} | {:.1} | {:.1} | {:.2} | {:.2} |",
@@ -877,7 +879,7 @@ fn table1(results: &Results) -> Sheet {
 mod tests {
     use super::*;
 
-    use crate::schema::{BuildStats, MemoryStats, RenderStats, Settings, Timing};
+    use crate::schema::{BuildStats, MemoryStats, Settings, Timing};
 
     /// An ESVO case at `level` with `blocks` blocks, `bytes`, a build `peak`, `steps` per ray and
     /// a render at `rate`× its paired bvh; `stored` of `fitted` contours.

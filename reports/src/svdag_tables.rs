@@ -301,8 +301,7 @@ fn fig13(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     out.push_str("|---|---:|---:|---:|---:|---:|---:|---|\n");
     let mut claims = Vec::new();
     let steps = |c: Option<&Case>| {
-        c.and_then(|c| c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary"))
-            .map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean))
+        c.and_then(crate::paper::cpu_primary).map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean))
     };
     for &scene in scenes {
         let [svo, esvo, bits, bricks] =

@@ -9,7 +9,8 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::schema::{Case, RenderStats, Results};
+use crate::paper::cpu_primary as primary;
+use crate::schema::{Case, Results};
 
 /// The structures this section is about.
 const GRIDS: [&str; 3] = ["vdb", "tree64", "brickmap"];
@@ -29,10 +30,6 @@ const VDB_COMPACT_BYTES: f64 = 2.0;
 const NANOVDB_THIN_BYTES: f64 = 5.5;
 const BRICKMAP_RANGE: (f64, f64) = (0.84, 1.74);
 const BUILD_VS_SVDAG: f64 = 1.5;
-
-fn primary(c: &Case) -> Option<&RenderStats> {
-    c.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary")
-}
 
 fn mrays(c: &Case) -> Option<f64> {
     primary(c).map(|r| r.mrays_per_s).filter(|m| *m > 0.0)
@@ -317,7 +314,7 @@ fn claims(out: &mut Sheet, scene: &str, l: u32, at: &[&Case]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::schema::{BuildStats, MemoryStats, Timing};
+    use crate::schema::{BuildStats, MemoryStats, RenderStats, Timing};
 
     /// A voxel case of the dragon at 2048³: `mrays` Mrays/s, `steps` per ray, `bytes` for 10⁶
     /// voxels, a build of `build_ms`; `params` is its own (`params.<structure>`).
