@@ -15,7 +15,7 @@ use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use kernels::cpu::render::{self, ShadeContext, Workload};
 use kernels::cpu::svdag_shadow::{
-    SurfacePoint, faces_away, shadow_map_lookups, shadow_queries, shadow_rays, surface_points,
+    SurfacePoint, faces_away, query_nodes_mean, shadow_map_lookups, shadow_queries, shadow_rays, surface_points,
 };
 use kernels::{Accel, Traverse};
 use reports::{BuildStats, Case, MemoryStats, ShadowRow, Timing};
@@ -125,6 +125,7 @@ fn compare_answers(
             occluded_fraction: answered.iter().filter(|(a, _)| *a).count() as f64 / n,
             differ,
             agreement: 1.0 - differ as f64 / n,
+            nodes_per_query: None,
         }
     };
     let reps = plan.warmup + plan.reps;
@@ -148,7 +149,8 @@ fn compare_answers(
         (Variant::Plain, "svdag-shadow [plain]", dag.plain.bytes()),
     ] {
         let (answers, samples) = time(&mut || shadow_queries(dag, variant, &points));
-        rows.push(row(name.into(), "query", bytes, answers, samples));
+        let nodes_per_query = Some(query_nodes_mean(dag, variant, &points));
+        rows.push(ShadowRow { nodes_per_query, ..row(name.into(), "query", bytes, answers, samples) });
     }
     let (answers, samples) = time(&mut || shadow_map_lookups(dag, &points));
     rows.push(row("shadow map".into(), "lookup", dag.stats.shadow_map_bytes, answers, samples));

@@ -291,6 +291,9 @@ pub struct ShadowRow {
     pub differ: u64,
     /// `1 − differ / points answered`.
     pub agreement: f64,
+    /// A point query's mean nodes read, over the points asked (`query` rows; older runs lack it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nodes_per_query: Option<f64>,
 }
 
 /// Every frame of an animation rendered once per repetition (primary rays, shaded, on the CPU);

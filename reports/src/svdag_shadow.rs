@@ -25,6 +25,15 @@ struct PaperScene {
 
 const PAPER_RESOLUTIONS: [u32; 5] = [1000, 2000, 4000, 16000, 32000];
 
+impl PaperScene {
+    /// Growth per doubling of storage `i` (S1, S2, S3) from resolution `k − 1` to `k` (4000³ to
+    /// 16000³ is two doublings).
+    fn growth(&self, k: usize, i: usize) -> f64 {
+        let doublings = (f64::from(PAPER_RESOLUTIONS[k]) / f64::from(PAPER_RESOLUTIONS[k - 1])).log2();
+        (self.storage[k][i] / self.storage[k - 1][i]).powf(1.0 / doublings)
+    }
+}
+
 const PAPER: &[PaperScene] = &[
     PaperScene {
         name: "Closed citadel",
@@ -175,7 +184,7 @@ fn table4(out: &mut Sheet, cases: &[&Case]) {
                 ),
                 subject: scene.to_string(),
                 expected: "3 falling to 2".into(),
-                ours: format!("at most {worst:.2}×"),
+                ours: format!("at most {worst:.2}×{}", growth_cause(scene, &ratios, worst)),
                 held: worst <= GROWTH_TARGET,
             });
         }
@@ -184,12 +193,7 @@ fn table4(out: &mut Sheet, cases: &[&Case]) {
         for (k, r) in PAPER_RESOLUTIONS.iter().enumerate() {
             let s = p.storage[k];
             let growth = |i: usize| {
-                if k == 0 {
-                    "—".to_string()
-                } else {
-                    let doublings = (f64::from(*r) / f64::from(PAPER_RESOLUTIONS[k - 1])).log2();
-                    format!("*{:.2}×*", (s[i] / p.storage[k - 1][i]).powf(1.0 / doublings))
-                }
+                if k == 0 { "—".to_string() } else { format!("*{:.2}×*", p.growth(k, i)) }
             };
             let _ = writeln!(
                 out,
@@ -229,6 +233,28 @@ fn table4(out: &mut Sheet, cases: &[&Case]) {
     let _ = writeln!(out);
 }
 
+/// Why the optimised DAG grows as it does, where it grows faster than the target: how much the
+/// closed objects' insides saved (S3/S2 over the resolutions), and the paper's own growth per
+/// doubling for its scene of that kind. Empty where the target holds.
+fn growth_cause(scene: &str, ratios: &[(u64, f64)], worst: f64) -> String {
+    if worst <= GROWTH_TARGET || ratios.is_empty() {
+        return String::new();
+    }
+    let (lo, hi) = ratios.iter().fold((f64::MAX, f64::MIN), |(lo, hi), r| (lo.min(r.1), hi.max(r.1)));
+    let range =
+        if format!("{lo:.3}") == format!("{hi:.3}") { format!("{lo:.3}") } else { format!("{lo:.3}–{hi:.3}") };
+    let mut cause = format!(
+        " (S3/S2 = {range}: merging closed objects' insides saved {:.0} % at most, so S3 grows as S2 does",
+        100.0 * (1.0 - lo)
+    );
+    if let Some(p) = PAPER.iter().find(|p| p.ours == scene) {
+        let growths: Vec<String> = (1..PAPER_RESOLUTIONS.len()).map(|k| format!("{:.2}", p.growth(k, 2))).collect();
+        let _ = write!(cause, "; the paper's {} grows {}× per doubling", p.name, growths.join(", "));
+    }
+    cause.push(')');
+    cause
+}
+
 fn workload(out: &mut Sheet, cases: &[&Case], threads: usize) {
     let with: Vec<&&Case> = cases.iter().filter(|c| !c.shadow.is_empty()).collect();
     if with.is_empty() {
@@ -241,38 +267,51 @@ fn workload(out: &mut Sheet, cases: &[&Case], threads: usize) {
          each through the ray structures (voxel ones also starting two of their voxels off the surface). Agreement \
          is with the BVH's shadow rays.\n\n",
     );
-    out.push_str("| scene | resolution | method | kind | MB | M points/s | agreement | differ | occluded |\n");
-    out.push_str("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
+    out.push_str(
+        "| scene | resolution | method | kind | MB | M points/s | nodes per query | agreement | differ | occluded |\n",
+    );
+    out.push_str("|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
     let mut rates = Vec::new();
     for c in with {
         for r in &c.shadow {
             let _ = writeln!(
                 out,
-                "| {} | {}³ | {} | {} | {} | {:.1} | {:.3} % | {} | {:.1} % |",
+                "| {} | {}³ | {} | {} | {} | {:.1} | {} | {:.3} % | {} | {:.1} % |",
                 c.scene,
                 c.resolution.unwrap_or(0),
                 r.method,
                 r.kind,
                 mb(r.bytes as f64),
                 r.m_per_s,
+                r.nodes_per_query.map_or("—".into(), |n| format!("{n:.1}")),
                 100.0 * r.agreement,
                 r.differ,
                 100.0 * r.occluded_fraction
             );
             if r.method == "svdag-shadow [optimised]" {
-                rates.push((c.scene.clone(), r.m_per_s, r.agreement));
+                let levels = c.resolution.map_or(0, u64::trailing_zeros);
+                rates.push((c.scene.clone(), r.m_per_s, r.agreement, r.nodes_per_query, levels));
             }
         }
     }
     let _ = writeln!(out);
-    for (scene, rate, agreement) in rates {
+    for (scene, rate, agreement, nodes, levels) in rates {
+        let held = rate >= QUERIES_PER_S;
+        // A query's cost grows with the nodes it reads before a uniform child answers it.
+        let cause = match nodes {
+            Some(n) if !held => format!(", a query reading {n:.1} nodes of {levels} levels"),
+            _ => String::new(),
+        };
         out.claim(Check {
             source: "issue 13",
             claim: format!("point queries answer at least {QUERIES_PER_S} M/s on 2 threads"),
             subject: scene.clone(),
             expected: format!("≥ {QUERIES_PER_S} M/s"),
-            ours: format!("{rate:.1} M/s on {threads} threads, {:.3} % agreeing with shadow rays", 100.0 * agreement),
-            held: rate >= QUERIES_PER_S,
+            ours: format!(
+                "{rate:.1} M/s on {threads} threads, {:.3} % agreeing with shadow rays{cause}",
+                100.0 * agreement
+            ),
+            held,
         });
     }
     let _ = writeln!(out);
@@ -325,7 +364,14 @@ mod tests {
                 case("room", 11, 3e6, 3e5, 3000.0, vec![]),
                 case("room", 12, 9e6, 4.5e5, 50.0, vec![]),
                 // Terrain: S3 growing 3× per doubling.
-                case("terrain", 10, 1e6, 9e5, 10.0, vec![row("svdag-shadow [optimised]", 12.0, 0.99)]),
+                case(
+                    "terrain",
+                    10,
+                    1e6,
+                    9e5,
+                    10.0,
+                    vec![ShadowRow { nodes_per_query: Some(8.5), ..row("svdag-shadow [optimised]", 12.0, 0.99) }],
+                ),
                 case("terrain", 11, 3e6, 2.7e6, 10.0, vec![]),
             ],
             ..Results::default()
@@ -342,7 +388,11 @@ mod tests {
         assert!(line("- room: the optimised shadow SVDAG is at most half").ends_with("**held**"));
         assert!(line("- room: the optimised shadow SVDAG grows").contains("ours at most 1.50×"));
         assert!(line("- room: the optimised shadow SVDAG grows").ends_with("**held**"));
-        assert!(line("- terrain: the optimised shadow SVDAG grows").contains("ours at most 3.00×"));
+        assert!(line("- terrain: the optimised shadow SVDAG grows").contains(
+            "ours at most 3.00× (S3/S2 = 0.900: merging closed objects' insides saved 10 % at most, so S3 grows \
+             as S2 does; the paper's Terrain grows 3.77, 3.27, 3.51, 2.01× per doubling)"
+        ));
+        assert!(!line("- room: the optimised shadow SVDAG grows").contains("S3/S2"));
         assert!(line("- terrain: the optimised shadow SVDAG grows").ends_with("**not held**"));
         assert!(line("- room: the shadow SVDAGs build at 4096²").contains("ours 50 ms"));
         assert!(
@@ -352,6 +402,12 @@ mod tests {
         assert!(line("- room: point queries").contains("ours 25.0 M/s"));
         assert!(line("- room: point queries").ends_with("**held**"));
         assert!(line("- terrain: point queries").contains("ours 12.0 M/s"));
+        assert!(
+            line("- terrain: point queries")
+                .contains("agreeing with shadow rays, a query reading 8.5 nodes of 10 levels")
+        );
+        assert!(!line("- room: point queries").contains("nodes of"));
+        assert!(line("| terrain | 1024³ | svdag-shadow [optimised] | query |").contains("| 12.0 | 8.5 |"));
         assert!(line("- terrain: point queries").ends_with("**not held**"));
     }
 }

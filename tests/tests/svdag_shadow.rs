@@ -98,6 +98,12 @@ fn voxel_answers(d: &ShadowSvdag) -> (u64, u64) {
                     let c = [u, v, z];
                     let plain = d.plain.lit_voxel(face, c, level);
                     assert_eq!(plain, z < a, "plain DAG against the shadow map at face {face} {c:?}");
+                    if (u * 7 + v * 3 + z) % 11 == 0 {
+                        let (lit, nodes) = d.plain.descend(face, c, level);
+                        assert_eq!(lit, plain);
+                        let want = plain_nodes_read(&d.lit_slices[face], n, c, level);
+                        assert_eq!(nodes, want, "nodes a plain query reads at face {face} {c:?}");
+                    }
                     match d.voxel_class(face, c) {
                         VoxelClass::Undefined => undefined += 1,
                         class => {
@@ -111,6 +117,32 @@ fn voxel_answers(d: &ShadowSvdag) -> (u64, u64) {
         }
     }
     (lit, undefined)
+}
+
+/// The nodes a plain DAG's query of voxel `c` reads, from the shadow map alone: the root, and
+/// one more for every block on the way down (side `2^(level − 1 − l)` below level `l`'s node)
+/// that holds both lit and shadowed voxels. A voxel is lit where its slice lies before the
+/// texel's first shadowed slice.
+fn plain_nodes_read(lit_slices: &[u16], n: u32, c: [u32; 3], level: u32) -> u32 {
+    let mut nodes = 1;
+    for l in 0..level - 1 {
+        let side = 1u32 << (level - 1 - l);
+        let [u0, v0, z0] = c.map(|x| x / side * side);
+        let (mut lo, mut hi) = (u32::MAX, 0);
+        for v in v0..v0 + side {
+            for u in u0..u0 + side {
+                let a = u32::from(lit_slices[(v * n + u) as usize]);
+                (lo, hi) = (lo.min(a), hi.max(a));
+            }
+        }
+        let all_lit = lo >= z0 + side;
+        let all_shadow = hi <= z0;
+        if all_lit || all_shadow {
+            break;
+        }
+        nodes += 1;
+    }
+    nodes
 }
 
 /// Parses a shadow DAG level by level: node sizes, pointers onto the next level's node starts,

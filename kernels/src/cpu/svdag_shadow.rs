@@ -76,6 +76,20 @@ pub fn shadow_queries(dag: &ShadowSvdag, variant: Variant, points: &[SurfacePoin
         .collect()
 }
 
+/// The mean number of nodes a `variant` DAG's query reads, over the points asked (facing the
+/// light, inside its frustum): what a query's cost grows with. Untimed; 0 where none is asked.
+pub fn query_nodes_mean(dag: &ShadowSvdag, variant: Variant, points: &[SurfacePoint]) -> f64 {
+    let light = dag.faces[0].light;
+    let (sum, n) = points
+        .par_iter()
+        .with_min_len(1024)
+        .filter(|s| !faces_away(s, light))
+        .filter_map(|s| dag.query_nodes(variant, query_point(dag, s)))
+        .map(|nodes| (u64::from(nodes), 1u64))
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if n == 0 { 0.0 } else { sum as f64 / n as f64 }
+}
+
 /// The same queries answered by the quantised shadow map the plain DAG encodes.
 pub fn shadow_map_lookups(dag: &ShadowSvdag, points: &[SurfacePoint]) -> Vec<Option<bool>> {
     let light = dag.faces[0].light;

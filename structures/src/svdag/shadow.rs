@@ -729,6 +729,12 @@ impl ShadowDag {
     /// to the first uniform child.
     #[inline]
     pub fn lit_voxel(&self, face: usize, c: [u32; 3], level: u32) -> bool {
+        self.descend(face, c, level).0
+    }
+
+    /// [`Self::lit_voxel`] with the nodes read on the way (1 for a uniform child of the root).
+    #[inline]
+    pub fn descend(&self, face: usize, c: [u32; 3], level: u32) -> (bool, u32) {
         let w = &self.words;
         let mut node = self.roots[face] as usize;
         for l in 0..level {
@@ -736,12 +742,12 @@ impl ShadowDag {
             let slot = (c[0] >> shift & 1) | (c[1] >> shift & 1) << 1 | (c[2] >> shift & 1) << 2;
             let mask = w[node];
             match mask >> (2 * slot) & 3 {
-                LIT => return true,
+                LIT => return (true, l + 1),
                 MIXED => {
                     let below = mask & SHADOW_MIXED_BITS & ((1u32 << (2 * slot)) - 1);
                     node = w[node + 1 + below.count_ones() as usize] as usize;
                 }
-                _ => return false,
+                _ => return (false, l + 1),
             }
         }
         unreachable!("the bottom level holds voxel codes only")
@@ -821,7 +827,13 @@ impl ShadowSvdag {
 
     /// The DAG that answers [`Self::lit`].
     pub fn dag(&self) -> &ShadowDag {
-        match self.params.variant {
+        self.variant(self.params.variant)
+    }
+
+    /// Either DAG.
+    #[inline]
+    pub fn variant(&self, variant: Variant) -> &ShadowDag {
+        match variant {
             Variant::Plain => &self.plain,
             Variant::Optimised => &self.optimised,
         }
@@ -852,11 +864,15 @@ impl ShadowSvdag {
     /// [`Self::lit`] by either DAG.
     #[inline]
     pub fn lit_in(&self, variant: Variant, p: Vec3) -> Option<bool> {
-        let dag = match variant {
-            Variant::Plain => &self.plain,
-            Variant::Optimised => &self.optimised,
-        };
+        let dag = self.variant(variant);
         self.locate(p).map(|(face, c)| dag.lit_voxel(face, c, self.level()))
+    }
+
+    /// The nodes a query of the world point `p` reads in either DAG (`None` outside the light's
+    /// frustum): the depth of its descent.
+    pub fn query_nodes(&self, variant: Variant, p: Vec3) -> Option<u32> {
+        let dag = self.variant(variant);
+        self.locate(p).map(|(face, c)| dag.descend(face, c, self.level()).1)
     }
 
     /// The quantised shadow map's answer for `p` (the plain DAG's, by construction).
