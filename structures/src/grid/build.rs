@@ -170,6 +170,21 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
             detail: format!("{} triangles; at most 2^31", tris.len()),
         });
     }
+    let (nodes, levels, budget_stop) = build_nodes(tris, kind);
+    let (headers, cells, refs) = flatten(&nodes);
+    let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
+    grid.isa = isa;
+    grid.levels = levels;
+    grid.budget_stop = budget_stop;
+    if layout == CellLayout::Blocks {
+        grid.copy_into_blocks()?;
+    }
+    Ok(grid)
+}
+
+/// Every (sub-)grid `kind` builds over `tris`, top first and level by level, with each level's
+/// statistics and the depth at which the reference budget stopped subdividing (if it did).
+fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>, Option<u32>) {
     let (bboxes, bounds, all) = top_input(tris);
 
     // The top grid.
@@ -224,15 +239,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
         }
         frontier = first_new..nodes.len() as u32;
     }
-    let (headers, cells, refs) = flatten(&nodes);
-    let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
-    grid.isa = isa;
-    grid.levels = levels;
-    grid.budget_stop = budget_stop;
-    if layout == CellLayout::Blocks {
-        grid.copy_into_blocks()?;
-    }
-    Ok(grid)
+    (nodes, levels, budget_stop)
 }
 
 /// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions; `level_beta` is
@@ -240,12 +247,16 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
 fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_beta: f64) -> Vec<Split> {
     let h = &level.header;
     let depth = h.depth;
-    let mut out = Vec::new();
-    for cell in 0..h.cell_count() {
+    if matches!(kind, GridKind::Ug { .. }) {
+        return Vec::new();
+    }
+    // The cells in parallel (a top grid of N cells is one grid): each one's decision reads only
+    // its own references, and the collected splits keep cell order.
+    let split_of = |cell: u32| -> Option<Split> {
         let refs = level.cell_refs(cell as usize);
         let n_i = refs.len() as f64;
         if refs.is_empty() {
-            continue;
+            return None;
         }
         let b = cell_box(h, cell);
         let extent = b.max - b.min;
@@ -280,13 +291,16 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_b
             }
             GridKind::Org { .. } => None,
         };
-        if let Some((res, unreduced_refs)) = split {
+        split.map(|(res, unreduced_refs)| {
             let refs = count_refs(&header(b, res, depth + 1), refs, bboxes);
-            out.push(Split { parent: g, cell, res, unreduced_refs, refs });
-        }
-    }
-    out
+            Split { parent: g, cell, res, unreduced_refs, refs }
+        })
+    };
+    (0..h.cell_count()).into_par_iter().with_min_len(SPLIT_CHUNK).filter_map(split_of).collect()
 }
+
+/// Cells a worker decides in one go: enough that a grid of a few cells is one task.
+const SPLIT_CHUNK: usize = 4096;
 
 fn level_stats(
     nodes: &[Node],
@@ -317,11 +331,46 @@ fn level_stats(
 }
 
 /// Lays the nodes out as headers, prefix-summed cells and references (see `layout`).
+///
+/// The cells between two subdivided ones are copied as a run: their offsets shifted by one
+/// amount and their references as one slice. A subdivided cell holds its sub-grid's one entry
+/// instead of its references.
 fn flatten(nodes: &[Node]) -> (Vec<GridHeader>, Vec<u32>, Vec<u32>) {
     let total_cells: usize = nodes.iter().map(|n| n.level.header.cell_count() as usize + 1).sum();
     let mut headers = Vec::with_capacity(nodes.len());
     let mut cells = Vec::with_capacity(total_cells);
-    let mut refs = Vec::new();
+    // At most every level's references (a subdivided cell's become its one sub-grid entry).
+    let mut refs = Vec::with_capacity(nodes.iter().map(|n| n.level.refs.len()).sum());
+    for node in nodes {
+        let mut h = node.level.header;
+        h.first_cell = cells.len() as u32;
+        headers.push(h);
+        let offsets = &node.level.offsets;
+        let copy_run = |cells: &mut Vec<u32>, refs: &mut Vec<u32>, from: usize, to: usize| {
+            // The run's first reference lands at `refs.len()`; the shift is taken modulo 2³²
+            // (a subdivided cell before it may have held more references than stored so far),
+            // and every shifted offset is a true position below 2³².
+            let shift = (refs.len() as u32).wrapping_sub(offsets[from]);
+            cells.extend(offsets[from..to].iter().map(|&o| o.wrapping_add(shift)));
+            refs.extend_from_slice(&node.level.refs[offsets[from] as usize..offsets[to] as usize]);
+        };
+        let mut from = 0;
+        for &(cell, child) in &node.children {
+            copy_run(&mut cells, &mut refs, from, cell as usize);
+            cells.push(refs.len() as u32);
+            refs.push(SUBGRID_BIT | child);
+            from = cell as usize + 1;
+        }
+        copy_run(&mut cells, &mut refs, from, h.cell_count() as usize);
+        cells.push(refs.len() as u32);
+    }
+    (headers, cells, refs)
+}
+
+/// [`flatten`] cell by cell: the test's reference.
+#[cfg(test)]
+fn flatten_per_cell(nodes: &[Node]) -> (Vec<GridHeader>, Vec<u32>, Vec<u32>) {
+    let (mut headers, mut cells, mut refs) = (Vec::new(), Vec::new(), Vec::new());
     for node in nodes {
         let mut h = node.level.header;
         h.first_cell = cells.len() as u32;
@@ -329,12 +378,9 @@ fn flatten(nodes: &[Node]) -> (Vec<GridHeader>, Vec<u32>, Vec<u32>) {
         let mut children = node.children.iter().peekable();
         for c in 0..h.cell_count() {
             cells.push(refs.len() as u32);
-            match children.peek() {
-                Some(&&(cell, child)) if cell == c => {
-                    refs.push(SUBGRID_BIT | child);
-                    children.next();
-                }
-                _ => refs.extend_from_slice(node.level.cell_refs(c as usize)),
+            match children.next_if(|&&(cell, _)| cell == c) {
+                Some(&(_, child)) => refs.push(SUBGRID_BIT | child),
+                None => refs.extend_from_slice(node.level.cell_refs(c as usize)),
             }
         }
         cells.push(refs.len() as u32);
@@ -396,4 +442,43 @@ fn mean_extent(tris: &[u32], bboxes: &[Aabb], within: &Aabb) -> Vec3 {
 
 fn triangle_box(t: &Triangle) -> Aabb {
     Aabb::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs copied whole lay out every grid kind exactly as cell-by-cell copying does, on scenes
+    /// with sub-grids at several depths (and none: the uniform grid).
+    #[test]
+    fn flatten_by_runs_equals_cell_by_cell() {
+        let kinds = [
+            GridKind::Ug { lambda: 1.0 },
+            GridKind::Rg { lambda: 1.0, gamma: 8, max_depth: 3 },
+            GridKind::Rg2,
+            GridKind::ORG_PAPER,
+            GridKind::Org {
+                lambda: 1.0,
+                leaf_lambda: 1.0,
+                alpha: 1.0,
+                gamma: 8,
+                max_depth: MAX_DEPTH,
+                beta: BetaRule::Level,
+                gamma_test: GammaTest::Reduced,
+                cell_test: CellTest::Sat,
+            },
+        ];
+        let scenes: Vec<_> = ["bunny", "teapot", "grass-1k", "stadium"]
+            .map(|name| scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}")))
+            .into();
+        for kind in kinds {
+            let mut sub_grids = 0;
+            for scene in &scenes {
+                let (nodes, _, _) = build_nodes(&scene.triangles(), kind);
+                sub_grids += nodes.len() - 1;
+                assert!(flatten(&nodes) == flatten_per_cell(&nodes), "{} {kind:?}: layouts differ", scene.name);
+            }
+            assert!(sub_grids > 0 || matches!(kind, GridKind::Ug { .. }), "{kind:?}: no sub-grid on any scene");
+        }
+    }
 }
