@@ -17,6 +17,7 @@ use reports::{
 };
 use scenes::error::bounded_text;
 use scenes::{Camera, Scene, Triangle};
+use structures::ms_since;
 use structures::{BuildInput, Params};
 
 use crate::agreement;
@@ -1108,8 +1109,4 @@ fn one_line(case: &Case) -> String {
         case.memory.bytes as f64 / (1u64 << 20) as f64,
         renders.join("; ")
     )
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }

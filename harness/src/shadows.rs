@@ -20,6 +20,7 @@ use kernels::cpu::svdag_shadow::{
 use kernels::{Accel, Traverse};
 use reports::{BuildStats, Case, MemoryStats, ShadowRow, Timing};
 use scenes::{Camera, Scene};
+use structures::ms_since;
 use structures::svdag::shadow::{ShadowSvdag, Variant};
 use structures::voxel::VoxelGrid;
 use structures::{BuildInput, Structure};
@@ -184,8 +185,4 @@ fn compare_answers(
 
 fn voxel_structure(name: &str) -> bool {
     kernels::find_structure(name).is_some_and(|e| e.family == "voxel")
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }

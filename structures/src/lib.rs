@@ -51,6 +51,11 @@ use scenes::{Scene, Triangle};
 pub use memory::MemoryReport;
 pub use params::Params;
 
+/// Milliseconds since `t`: how every build phase is timed.
+pub fn ms_since(t: std::time::Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
 /// What every structure offers the harness, whatever its family.
 pub trait Structure: Send + Sync {
     /// The name used on the command line and in results (`bvh`, `org`, `esvo`, …).

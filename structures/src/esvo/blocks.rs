@@ -7,10 +7,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::attributes::{CompressedBlock, compress_block};
-use super::build::{limit, ms_since};
+use super::build::limit;
 use super::layout::*;
 use super::{Attributes, EsvoStats};
 use crate::BuildError;
+use crate::ms_since;
 use crate::voxel::Octree;
 
 /// What a block may hold: its contour pointers (24 bits, relative to the descriptor) must reach

@@ -37,15 +37,12 @@ use super::emit::Emitter;
 use super::fit::{ContourFitter, FitBuffers, Voxel};
 use super::{Esvo, EsvoParams};
 use crate::BuildError;
+use crate::ms_since;
 use crate::voxel::{self, CodeBounds, Octree, OctreeBuilder, VoxelAttr, VoxelChunk, VoxelGrid, morton};
 
 /// Voxels gathered before a batch of sub-cubes is converted (octrees and contours in parallel):
 /// enough sub-cubes to keep every thread busy, few enough that their octrees stay small.
 const BATCH_VOXELS: usize = 1 << 22;
-
-pub(super) fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
-}
 
 pub fn build(scene: &Scene, params: EsvoParams) -> Result<Esvo, BuildError> {
     let grid = VoxelGrid::fit(scene.bounds(), params.level);

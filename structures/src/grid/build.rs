@@ -7,10 +7,13 @@ use glam::Vec3;
 use rayon::prelude::*;
 use scenes::{Aabb, Triangle};
 
+use std::time::Instant;
+
 use super::layout::{GridHeader, SUBGRID_BIT};
 use super::level::{Footprint, LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
-use super::{BetaRule, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats};
+use super::{BetaRule, BuildPhases, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats};
+use crate::ms_since;
 use crate::simd::SimdChoice;
 use crate::{BuildError, BuildInput};
 
@@ -170,8 +173,10 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
             detail: format!("{} triangles; at most 2^31", tris.len()),
         });
     }
-    let (nodes, levels, budget_stop) = build_nodes(tris, kind);
+    let (nodes, levels, budget_stop, mut phases) = build_nodes(tris, kind);
+    let t = Instant::now();
     let (headers, cells, refs) = flatten(&nodes);
+    drop(nodes);
     let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
     grid.isa = isa;
     grid.levels = levels;
@@ -179,18 +184,24 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     if layout == CellLayout::Blocks {
         grid.copy_into_blocks()?;
     }
+    phases.layout_ms = ms_since(t);
+    grid.phases = phases;
     Ok(grid)
 }
 
 /// Every (sub-)grid `kind` builds over `tris`, top first and level by level, with each level's
-/// statistics and the depth at which the reference budget stopped subdividing (if it did).
-fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>, Option<u32>) {
+/// statistics, the depth at which the reference budget stopped subdividing (if it did), and the
+/// time of each phase but the layout.
+fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>, Option<u32>, BuildPhases) {
+    let mut phases = BuildPhases::default();
+    let t = Instant::now();
     let (bboxes, bounds, all) = top_input(tris);
 
     // The top grid.
-    let exact = (kind.cell_test() == CellTest::Sat).then_some(&tris[..]);
+    let exact = (kind.cell_test() == CellTest::Sat).then_some(tris);
     let fp = Footprint { bboxes: &bboxes, exact };
     let top = build_level(header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1), &all, fp, true);
+    phases.top_ms = ms_since(t);
     let mut nodes = vec![Node { level: top, input: all.len() as u64, children: Vec::new() }];
     let mut levels = Vec::new();
     let mut stored_refs = nodes[0].level.refs.len() as u64;
@@ -205,6 +216,7 @@ fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>
             .iter()
             .fold((0u64, 0u64), |(h, g), n| (h + n.level.refs.len() as u64, g + n.input));
         let level_beta = (held as f64 / given.max(1) as f64).max(1.0);
+        let t = Instant::now();
         let splits: Vec<Split> = frontier
             .clone()
             .into_par_iter()
@@ -218,6 +230,8 @@ fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>
             stored_refs += new_refs;
             splits
         };
+        phases.decide_ms += ms_since(t);
+        let t = Instant::now();
         let first_new = nodes.len() as u32;
         let built: Vec<LevelGrid> = splits
             .par_iter()
@@ -227,6 +241,7 @@ fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>
                 build_level(header(b, s.res, depth + 1), parent.cell_refs(s.cell as usize), fp, false)
             })
             .collect();
+        phases.sub_grids_ms += ms_since(t);
         levels.push(level_stats(&nodes, frontier.clone(), &splits, kind, level_beta));
         for (i, s) in splits.iter().enumerate() {
             nodes[s.parent as usize].children.push((s.cell, first_new + i as u32));
@@ -239,7 +254,7 @@ fn build_nodes(tris: &[Triangle], kind: GridKind) -> (Vec<Node>, Vec<LevelStats>
         }
         frontier = first_new..nodes.len() as u32;
     }
-    (nodes, levels, budget_stop)
+    (nodes, levels, budget_stop, phases)
 }
 
 /// The cells of grid `g` that `kind` subdivides, with their sub-grid resolutions; `level_beta` is
@@ -267,6 +282,11 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_b
             }
             GridKind::Rg2 => (depth == 1).then(|| (eq1(extent, 8.0 * n_i), 0)),
             GridKind::Org { leaf_lambda: lambda, gamma, .. } if f64::from(lambda) * n_i < min_target_for(gamma) => None,
+            // With the level's β and the γ test on the reduced sub-grid, the target Algorithm 2
+            // would be given is known before any per-cell work: below the bound, no split.
+            GridKind::Org {
+                leaf_lambda: lambda, gamma, beta: BetaRule::Level, gamma_test: GammaTest::Reduced, ..
+            } if f64::from(lambda) * n_i / level_beta < min_target_for(gamma) => None,
             GridKind::Org { leaf_lambda: lambda, alpha, gamma, max_depth, beta, gamma_test, .. }
                 if depth < max_depth =>
             {
@@ -296,10 +316,15 @@ fn splits_of(kind: GridKind, g: u32, level: &LevelGrid, bboxes: &[Aabb], level_b
             Split { parent: g, cell, res, unreduced_refs, refs }
         })
     };
-    (0..h.cell_count()).into_par_iter().with_min_len(SPLIT_CHUNK).filter_map(split_of).collect()
+    if h.cell_count() as usize <= SPLIT_CHUNK {
+        // A sub-grid's few cells: a parallel iterator's set-up would cost more than they do.
+        (0..h.cell_count()).filter_map(split_of).collect()
+    } else {
+        (0..h.cell_count()).into_par_iter().with_min_len(SPLIT_CHUNK).filter_map(split_of).collect()
+    }
 }
 
-/// Cells a worker decides in one go: enough that a grid of a few cells is one task.
+/// Cells a worker decides in one go; a grid of no more is decided on the calling thread.
 const SPLIT_CHUNK: usize = 4096;
 
 fn level_stats(
@@ -474,7 +499,7 @@ mod tests {
         for kind in kinds {
             let mut sub_grids = 0;
             for scene in &scenes {
-                let (nodes, _, _) = build_nodes(&scene.triangles(), kind);
+                let (nodes, ..) = build_nodes(&scene.triangles(), kind);
                 sub_grids += nodes.len() - 1;
                 assert!(flatten(&nodes) == flatten_per_cell(&nodes), "{} {kind:?}: layouts differ", scene.name);
             }

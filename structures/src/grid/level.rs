@@ -51,7 +51,10 @@ pub(super) fn cell_range(h: &GridHeader, b: &Aabb) -> ([u32; 3], [u32; 3]) {
             continue;
         }
         let slack = slack(h, a);
-        let cell = |x: f32| ((x - h.min[a]) / size).floor().clamp(0.0, last as f32) as u32;
+        // floor(clamp(v)) without a floor: `last` is a whole number, and `as u32` truncates,
+        // which is the floor of a non-negative value (NaN → 0 either way). `floor` is a libm
+        // call on the x86-64 baseline, and this runs for every triangle of every grid built.
+        let cell = |x: f32| ((x - h.min[a]) / size).clamp(0.0, last as f32) as u32;
         lo[a] = cell(b.min[a] - slack);
         hi[a] = cell(b.max[a] + slack);
     }
@@ -184,7 +187,7 @@ fn overlaps_cell(tri: &Triangle, h: &GridHeader, c: [u32; 3]) -> bool {
 }
 
 /// How far a triangle's box is widened on `axis` before it is listed (see [`cell_range`]).
-fn slack(h: &GridHeader, axis: usize) -> f32 {
+pub(super) fn slack(h: &GridHeader, axis: usize) -> f32 {
     4.0 * f32::EPSILON * h.min[axis].abs().max(h.max[axis].abs()) + 1e-4 * h.cell_size[axis]
 }
 

@@ -198,6 +198,24 @@ pub struct Grid {
     /// grid holds `blocks[cell_blocks[first + c]..cell_blocks[first + c + 1]]` (none for a
     /// sub-grid link); empty otherwise.
     pub cell_blocks: Vec<u32>,
+    /// Where this build's time went.
+    pub phases: BuildPhases,
+}
+
+/// Where a grid build's wall time went, in ms, on the build's threads: what the report names
+/// when one grid kind builds slower than another.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BuildPhases {
+    /// The triangles' boxes, the top grid's resolution (Algorithm 2's mean face extent for ORG)
+    /// and the top grid itself.
+    pub top_ms: f64,
+    /// Deciding which cells to subdivide, and each sub-grid's resolution and references.
+    pub decide_ms: f64,
+    /// Building the sub-grids.
+    pub sub_grids_ms: f64,
+    /// Laying every grid out as one array of cells and one of references, with the bricks' bits
+    /// (and the triangle blocks for `layout=blocks`).
+    pub layout_ms: f64,
 }
 
 /// The instruction sets the grid kernel's triangle tests are written for (four lanes over each
@@ -232,6 +250,7 @@ impl Grid {
             layout: CellLayout::Refs,
             blocks: Vec::new(),
             cell_blocks: Vec::new(),
+            phases: BuildPhases::default(),
         }
     }
 
@@ -322,6 +341,7 @@ impl Structure for Grid {
             "budget_stop": self.budget_stop,
             "simd": self.isa.name(),
             "layout": self.layout,
+            "phases_ms": self.phases,
         })
     }
 }

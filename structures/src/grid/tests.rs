@@ -400,3 +400,36 @@ fn algorithm2_caps_a_scene_of_known_face_size_where_the_formula_says() {
         assert_eq!(ug.headers[0].res, [ug_res; 3], "Eq. 1 at N = {n}");
     }
 }
+
+/// A triangle's cell range is the floor of its box's cell coordinates clamped to the grid, for
+/// boxes inside, straddling and outside the grid, on boundaries, and NaN or infinite.
+#[test]
+fn cell_ranges_are_floors_clamped_to_the_grid() {
+    use rand::{Rng, SeedableRng};
+
+    use super::level::{cell_range, header};
+    let h = header(Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 0.5, 2.7)), [8, 5, 7], 1);
+    let slack = |a: usize| super::level::slack(&h, a);
+    let floor_cell =
+        |a: usize, x: f32| ((x - h.min[a]) / h.cell_size[a]).floor().clamp(0.0, (h.res[a] - 1) as f32) as u32;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let mut coordinates: Vec<f32> = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, 0.0];
+    for a in 0..3 {
+        // Every cell boundary, a hair either side, and random points from well outside to well inside.
+        for i in 0..=h.res[a] {
+            let x = h.boundary(a, i);
+            coordinates.extend([x, x.next_down(), x.next_up()]);
+        }
+        coordinates.extend((0..200).map(|_| h.min[a] + rng.random_range(-0.5..1.5f32) * (h.max()[a] - h.min[a])));
+    }
+    for &x in &coordinates {
+        for &y in &coordinates[..40] {
+            let b = Aabb::new(Vec3::splat(x), Vec3::splat(y));
+            let (lo, hi) = cell_range(&h, &b);
+            for a in 0..3 {
+                assert_eq!(lo[a], floor_cell(a, b.min[a] - slack(a)), "axis {a}, low end of {b:?}");
+                assert_eq!(hi[a], floor_cell(a, b.max[a] + slack(a)), "axis {a}, high end of {b:?}");
+            }
+        }
+    }
+}

@@ -23,6 +23,7 @@ use super::layout::node_words;
 use super::reduce::{Dag, Stream};
 use super::{Root, Source, Svdag, SvdagParams, SvdagStats};
 use crate::BuildError;
+use crate::ms_since;
 use crate::voxel::{self, CodeBounds, Octree, VoxelGrid, VoxelizeStats};
 
 /// Voxels gathered before a batch of sub-cubes is reduced in parallel: enough sub-cubes to keep
@@ -308,8 +309,4 @@ pub(crate) fn lay_out(mut dag: Dag) -> Result<(Vec<u32>, Vec<u32>), BuildError> 
         }
     }
     Ok((words, starts))
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }

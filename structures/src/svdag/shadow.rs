@@ -48,6 +48,7 @@ use serde_json::json;
 use super::build::lay_out;
 use super::layout::SHADOW_MIXED_BITS;
 use super::reduce::{Dag, LevelStore};
+use crate::ms_since;
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
 
 /// The widest frustum half-angle's tangent (about 71.6°): a light inside the scene (a room's
@@ -1146,10 +1147,6 @@ impl Structure for ShadowSvdag {
             }
         })
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

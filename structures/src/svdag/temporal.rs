@@ -40,6 +40,7 @@ use super::build::{Streamed, Streamer, Subcube, lay_out};
 use super::layout::{CHILD_MASK, Leaves, pointer_index};
 use super::reduce::Dag;
 use super::{Root, Svdag, SvdagParams, SvdagStats};
+use crate::ms_since;
 use crate::svo::voxel_params_json;
 use crate::voxel::{self, VoxelGrid, VoxelizeStats};
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
@@ -521,8 +522,4 @@ impl Structure for TemporalSvdag {
         });
         v
     }
-}
-
-fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
