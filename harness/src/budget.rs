@@ -35,12 +35,24 @@ pub const LOAD_BYTES_PER_GZ_BYTE: u64 = 8 * LOAD_BYTES_PER_OBJ_BYTE;
 /// into the soup (12 bytes of indices become 36 of corners).
 pub const LOAD_BYTES_PER_GLTF_BYTE: u64 = 5;
 
+/// A PLY file, per byte: the loader's records (72 bytes a vertex, a face's index list on the heap),
+/// then the mesh and the soup; a vertex takes 12–30 bytes of file and a face 13–20.
+pub const LOAD_BYTES_PER_PLY_BYTE: u64 = 8;
+/// A `.ply.gz` file, per compressed byte: PLY compresses 2–4×.
+pub const LOAD_BYTES_PER_PLY_GZ_BYTE: u64 = 4 * LOAD_BYTES_PER_PLY_BYTE;
+/// An STL file, per byte: a binary facet's 50 bytes become 36 of positions, 12 of indices and 36
+/// in the soup; an ASCII facet takes several times the bytes for the same.
+pub const LOAD_BYTES_PER_STL_BYTE: u64 = 2;
+
 /// Bytes a scene file of `file_bytes` takes to load, by its extension.
 pub fn scene_file_bytes(path: &str, file_bytes: u64) -> u64 {
     let lower = path.to_ascii_lowercase();
     let per_byte = match () {
         _ if lower.ends_with(".obj.gz") => LOAD_BYTES_PER_GZ_BYTE,
         _ if lower.ends_with(".obj") => LOAD_BYTES_PER_OBJ_BYTE,
+        _ if lower.ends_with(".ply.gz") => LOAD_BYTES_PER_PLY_GZ_BYTE,
+        _ if lower.ends_with(".ply") => LOAD_BYTES_PER_PLY_BYTE,
+        _ if lower.ends_with(".stl") => LOAD_BYTES_PER_STL_BYTE,
         _ => LOAD_BYTES_PER_GLTF_BYTE,
     };
     file_bytes.saturating_mul(per_byte)

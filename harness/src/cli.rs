@@ -194,7 +194,7 @@ pub struct RunArgs {
     #[arg(long, value_enum)]
     pub preset: Option<Preset>,
     /// Scenes, comma-separated: built-in names (see `harness list scenes`), grass-<N>, or paths to
-    /// .obj, .obj.gz, .gltf, .glb files.
+    /// .obj, .obj.gz, .gltf, .glb, .ply, .ply.gz, .stl files.
     #[arg(long, value_delimiter = ',')]
     pub scenes: Vec<String>,
     /// Structures, comma-separated (see `harness list structures`).
@@ -295,7 +295,7 @@ pub struct RunArgs {
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
     /// Scenes, comma-separated: built-in names (see `harness list scenes`), grass-<N>, name@f<t>
-    /// (one frame of an animated scene), or paths to .obj, .obj.gz, .gltf, .glb files.
+    /// (one frame of an animated scene), or paths to .obj, .obj.gz, .gltf, .glb, .ply, .ply.gz, .stl files.
     #[arg(long, value_delimiter = ',', required = true)]
     pub scenes: Vec<String>,
     /// Structures, comma-separated (see `harness list structures`).

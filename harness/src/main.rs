@@ -87,7 +87,7 @@ fn main() -> ExitCode {
 fn list(what: ListWhat) {
     let all = what == ListWhat::All;
     if all || what == ListWhat::Scenes {
-        println!("scenes (built in; also grass-<N> and paths to .obj/.obj.gz/.gltf/.glb):");
+        println!("scenes (built in; also grass-<N> and paths to .obj/.obj.gz/.gltf/.glb/.ply/.ply.gz/.stl):");
         for s in scenes::BUILTIN_SCENES {
             println!("  {s}");
         }

@@ -58,7 +58,7 @@ pub fn shipped_asset(name: &str) -> Option<Result<Scene, SceneError>> {
 
 /// Resolves a scene name: a built-in scene, `grass-<N>` (N like `2500`, `10k`, `1m`), an animated
 /// scene's frame (`kitchen-anim` is frame 0 of [`DEFAULT_FRAMES`], `kitchen-anim@f<t>` frame t), or
-/// a path to an `.obj`, `.obj.gz`, `.gltf` or `.glb` file; any of them followed by `@sub<k>` is
+/// a path to an `.obj`, `.obj.gz`, `.gltf`, `.glb`, `.ply`, `.ply.gz` or `.stl` file; any of them followed by `@sub<k>` is
 /// midpoint-subdivided `k` times (`dragon@sub1`: 3.5 M triangles).
 ///
 /// A static scene's degenerate and duplicated triangles are dropped ([`Scene::dropped`] counts
@@ -232,9 +232,10 @@ fn load_unmodified(name: &str, max_bytes: u64) -> Result<Scene, SceneError> {
             name: name.into(),
             detail: format!(
                 "not a built-in scene ({}, grass-<N>, blades-<N>), an animated scene ({}, each with an optional @f<frame>) \
-                 nor a path ending in .obj, .obj.gz, .gltf or .glb",
+                 nor a path ending in {}",
                 BUILTIN_SCENES.join(", "),
-                ANIMATED_SCENES.join(", ")
+                ANIMATED_SCENES.join(", "),
+                load::EXTENSIONS.join(", ")
             ),
         }),
     }

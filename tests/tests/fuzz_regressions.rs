@@ -45,6 +45,18 @@ fn obj_gz_crashes_stay_fixed() {
 }
 
 #[test]
+fn ply_crashes_stay_fixed() {
+    let n = replay("ply", |b| scene_error(scenes::load::load_bytes("fuzz.ply", b)));
+    assert!(n > 0, "the corpus holds hostile PLY files");
+}
+
+#[test]
+fn stl_crashes_stay_fixed() {
+    let n = replay("stl", |b| scene_error(scenes::load::load_bytes("fuzz.stl", b)));
+    assert!(n > 0, "the corpus holds hostile STL files");
+}
+
+#[test]
 fn gltf_crashes_stay_fixed() {
     let n = replay("gltf", |b| {
         let name = if b.starts_with(b"glTF") { "fuzz.glb" } else { "fuzz.gltf" };

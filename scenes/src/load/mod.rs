@@ -1,4 +1,5 @@
-//! Scene files: OBJ (plain or gzipped, through `tobj`) and glTF/GLB (through `gltf`).
+//! Scene files: OBJ (plain or gzipped, through `tobj`), glTF/GLB (through `gltf`), PLY (plain or
+//! gzipped, through `ply-rs-bw`) and STL (ASCII through `stl_io`, binary records read here).
 //!
 //! Contract (DESIGN.md §3): bad input gets an error naming the file and the line (OBJ) or element
 //! (glTF) — malformed or truncated files, NaN/inf coordinates, out-of-range indices, empty meshes.
@@ -10,6 +11,8 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod ply;
+pub mod stl;
 
 use std::io::Read;
 use std::path::Path;
@@ -17,10 +20,13 @@ use std::path::Path;
 use crate::error::SceneError;
 use crate::scene::Scene;
 
+/// The file extensions [`load_file`] understands, longest first where one ends another.
+pub const EXTENSIONS: [&str; 7] = [".obj.gz", ".obj", ".gltf", ".glb", ".ply.gz", ".ply", ".stl"];
+
 /// True for the file extensions [`load_file`] understands.
 pub fn is_scene_file(path: &Path) -> bool {
     let name = path.to_string_lossy().to_ascii_lowercase();
-    [".obj", ".obj.gz", ".gltf", ".glb"].iter().any(|ext| name.ends_with(ext))
+    EXTENSIONS.iter().any(|ext| name.ends_with(ext))
 }
 
 /// Loads a scene file, choosing the loader by extension. The scene is named after the file stem.
@@ -92,15 +98,23 @@ pub fn load_bytes_within(path: &str, bytes: &[u8], max_bytes: u64) -> Result<Sce
         obj::parse_obj(path, bytes).map(|mesh| Scene::from_mesh(stem, mesh))
     } else if lower.ends_with(".gltf") || lower.ends_with(".glb") {
         gltf::parse_gltf(path, bytes, Path::new(path).parent()).map(|mesh| Scene::from_mesh(stem, mesh))
+    } else if lower.ends_with(".ply.gz") {
+        let data = obj::gunzip_within(path, bytes, max_bytes)?;
+        ply::parse_ply(path, &data).map(|mesh| Scene::from_mesh(stem, mesh))
+    } else if lower.ends_with(".ply") {
+        ply::parse_ply(path, bytes).map(|mesh| Scene::from_mesh(stem, mesh))
+    } else if lower.ends_with(".stl") {
+        stl::parse_stl(path, bytes).map(|mesh| Scene::from_mesh(stem, mesh))
     } else {
-        Err(SceneError::UnknownScene { name: path.into(), detail: "expected .obj, .obj.gz, .gltf or .glb".into() })
+        Err(SceneError::UnknownScene { name: path.into(), detail: format!("expected {}", EXTENSIONS.join(", ")) })
     }
 }
 
-fn scene_stem(path: &str) -> String {
+/// `dir/bunny.ply.gz` → `bunny`: the file's name without the extension that picked its loader.
+pub(crate) fn scene_stem(path: &str) -> String {
     let file = Path::new(path).file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
     let lower = file.to_ascii_lowercase();
-    for ext in [".obj.gz", ".obj", ".gltf", ".glb"] {
+    for ext in EXTENSIONS {
         if lower.ends_with(ext) {
             return file[..file.len() - ext.len()].to_string();
         }
