@@ -620,3 +620,39 @@ fn huge_counts_in_headers_are_errors_not_allocations() {
     let err = obj_err(&format!("{SQUARE}f 1 2 99999999999\n"));
     assert_line(&err, 5);
 }
+
+/// OBJ files from older exporters load whole where they differ only in what a benchmark never
+/// uses (issue 44): a Latin-1 material or group name, a `usemtl` without a name, a UTF-16 file
+/// with its byte-order mark, a UTF-8 byte-order mark. Geometry lines stay strict: a `v` line that
+/// is not UTF-8 is still an error at its line, and line numbers count as in the file.
+#[test]
+fn older_exporters_names_and_encodings_do_not_refuse_the_geometry() {
+    let want = obj(&format!("{SQUARE}f 1 2 3 4\n"));
+    let mut latin1 = format!("{SQUARE}mtllib scene.mtl\ng Terrain\n").into_bytes();
+    latin1.extend_from_slice(b"usemtl Terraind\xe4k\no Kl\xf6tze\nf 1 2 3 4\n");
+    let nameless = format!("{SQUARE}usemtl\nusemtl  \ng\nf 1 2 3 4\n").into_bytes();
+    let text = format!("{SQUARE}usemtl stone\nf 1 2 3 4\n");
+    let utf16 = |big: bool| -> Vec<u8> {
+        let bom: [u8; 2] = if big { [0xFE, 0xFF] } else { [0xFF, 0xFE] };
+        let units = text.encode_utf16().flat_map(|u| if big { u.to_be_bytes() } else { u.to_le_bytes() });
+        bom.into_iter().chain(units).collect()
+    };
+    let utf8_bom = [&[0xEF, 0xBB, 0xBF][..], text.as_bytes()].concat();
+    for (what, bytes) in [
+        ("a Latin-1 material name", latin1),
+        ("usemtl without a name", nameless),
+        ("UTF-16 LE", utf16(false)),
+        ("UTF-16 BE", utf16(true)),
+        ("a UTF-8 byte-order mark", utf8_bom),
+    ] {
+        let mesh = parse_obj("old.obj", &bytes).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!((&mesh.positions, &mesh.indices), (&want.positions, &want.indices), "{what}");
+    }
+    let mut bad = SQUARE.as_bytes().to_vec();
+    bad.extend_from_slice(b"usemtl Terraind\xe4k\nv 1 \xe4 0\nf 1 2 3\n");
+    let err = match parse_obj("bad.obj", &bad) {
+        Ok(m) => panic!("a v line that is not UTF-8 loaded {} triangles", m.triangle_count()),
+        Err(e) => e,
+    };
+    assert_line(&err, 6);
+}

@@ -75,6 +75,7 @@ pub fn gunzip_within(path: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<u8>
 
 /// Parses OBJ text into one mesh: all objects and groups merged, polygons fan-triangulated.
 pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
+    let bytes = &*lenient(bytes);
     // `..Default::default()` keeps this compiling if tobj's `merging`/`reordering` features
     // (which add fields) get enabled elsewhere in the dependency graph.
     #[allow(clippy::needless_update)]
@@ -120,6 +121,59 @@ pub fn parse_obj(path: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
     // Catches anything tobj let through that breaks the mesh contract.
     mesh.validate(path)?;
     Ok(mesh)
+}
+
+/// Keywords whose rest of line is a name (or, for `s`, a smoothing group): never geometry.
+const NAME_KEYWORDS: [&[u8]; 5] = [b"usemtl", b"mtllib", b"g", b"o", b"s"];
+
+/// The OBJ as tobj can read it, where a file from an older exporter differs only in what a
+/// benchmark never uses (issue 44), line for line so errors keep their line numbers:
+/// * a UTF-16 file (with its byte-order mark) is decoded, and a UTF-8 byte-order mark dropped;
+/// * a name in bytes that are not UTF-8 (`usemtl Terraindäk` in Latin-1) is kept lossily;
+/// * a `usemtl` without a name, which tobj refuses, is blanked (materials are ignored anyway).
+///
+/// Geometry lines stay as strict as before: a `v` or `f` line that is not UTF-8 is still an error at
+/// its line. A file needing none of this is returned as it is, after one UTF-8 check.
+fn lenient(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
+    use std::borrow::Cow;
+    let utf16 = |big: bool| {
+        let units = bytes[2..]
+            .chunks_exact(2)
+            .map(|u| if big { u16::from_be_bytes([u[0], u[1]]) } else { u16::from_le_bytes([u[0], u[1]]) });
+        let text: String = char::decode_utf16(units).map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER)).collect();
+        text.into_bytes()
+    };
+    let bytes: Cow<[u8]> = match bytes {
+        [0xFF, 0xFE, ..] => Cow::Owned(utf16(false)),
+        [0xFE, 0xFF, ..] => Cow::Owned(utf16(true)),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => Cow::Borrowed(rest),
+        _ => Cow::Borrowed(bytes),
+    };
+    let nameless_usemtl = |line: &[u8]| line.trim_ascii() == b"usemtl";
+    let name_line = |line: &[u8]| {
+        let word = line.trim_ascii_start().split(u8::is_ascii_whitespace).next().unwrap_or_default();
+        NAME_KEYWORDS.contains(&word)
+    };
+    let needs = |line: &[u8]| nameless_usemtl(line) || (name_line(line) && std::str::from_utf8(line).is_err());
+    let suspect = std::str::from_utf8(&bytes).is_err() || memchr::memmem::find(&bytes, b"usemtl").is_some();
+    if !suspect || !bytes.split(|&b| b == b'\n').any(needs) {
+        return bytes;
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if i > 0 {
+            out.push(b'\n');
+        }
+        if nameless_usemtl(line) {
+            continue;
+        }
+        if name_line(line) && std::str::from_utf8(line).is_err() {
+            out.extend_from_slice(String::from_utf8_lossy(line).as_bytes());
+        } else {
+            out.extend_from_slice(line);
+        }
+    }
+    Cow::Owned(out)
 }
 
 /// Appends one tobj mesh (its own compacted vertex list) to `mesh`.
