@@ -656,3 +656,77 @@ fn older_exporters_names_and_encodings_do_not_refuse_the_geometry() {
     };
     assert_line(&err, 6);
 }
+
+/// What the glTF schema allows and the crate refused (issue 44): no `scene` loads the first one
+/// and says so; a scene without `nodes` is an empty scene; glTF 1.0 (JSON, or a version-1 GLB)
+/// is refused by its version, and Draco by name, each in one clear line.
+#[test]
+fn gltf_scenes_versions_and_undecoded_extensions_get_clear_answers() {
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json.as_object_mut().map(|o| o.remove("scene"));
+    json["scenes"] = json!([{"nodes": [0]}, {"nodes": [1]}]);
+    let mesh = parse_gltf("first.gltf", &gltf_text(json, &bin), None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(mesh.triangle_count(), 1, "the first scene's one node");
+    assert!(mesh.provenance.contains("no default scene: the first of 2"), "{}", mesh.provenance);
+
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json["scenes"] = json!([{"name": "empty"}]);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(&err, SceneError::Empty { detail, .. } if detail.contains("no nodes")), "{err}");
+
+    let v1 = json!({"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}}, "scenes": {"s": {"nodes": []}}});
+    let err = gltf_err(&serde_json::to_vec(&v1).unwrap_or_default());
+    assert!(matches!(&err, SceneError::Unsupported { detail, .. } if detail.contains("glTF 1.0")), "{err}");
+    let (json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    let mut old = glb(&json, &bin);
+    old[4..8].copy_from_slice(&1u32.to_le_bytes());
+    let err = parse_gltf("old.glb", &old, None).map(|_| ()).expect_err("a version-1 GLB");
+    assert!(matches!(&err, SceneError::Unsupported { detail, .. } if detail.contains("GLB version 1")), "{err}");
+
+    let (mut json, bin) = document(&TRIANGLE, &[0, 1, 2]);
+    json["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(
+        matches!(&err, SceneError::Unsupported { .. }) && element(&err).contains("KHR_draco_mesh_compression"),
+        "{err}"
+    );
+}
+
+/// KHR_mesh_quantization: 16-bit positions scaled back by their node, normalized 8-bit ones, and
+/// normalized 8-bit normals read as the extension maps them; the same integer types without the
+/// extension declared are still refused.
+#[test]
+fn gltf_quantized_positions_and_normals_are_scaled_back() {
+    let (mut json, _) = document(&TRIANGLE, &[0, 1, 2]);
+    let mut bin: Vec<u8> =
+        [[0u16, 0, 0], [1000, 0, 0], [0, 1000, 0]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    bin.extend([0u8, 0]); // pad the normals to 4 bytes
+    let normals_at = bin.len();
+    bin.extend([[0i8, 0, 127, 0], [0, 0, 127, 0], [0, -128, 0, 0]].iter().flatten().map(|&x| x as u8));
+    let indices_at = bin.len();
+    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+    json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    json["scenes"] = json!([{"nodes": [0]}]);
+    json["nodes"] = json!([{"mesh": 0, "scale": [0.001, 0.001, 0.001]}]);
+    json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(2);
+    json["buffers"] = json!([{"byteLength": bin.len()}]);
+    json["bufferViews"] = json!([
+        {"buffer": 0, "byteOffset": 0, "byteLength": 18},
+        {"buffer": 0, "byteOffset": indices_at, "byteLength": 6},
+        {"buffer": 0, "byteOffset": normals_at, "byteLength": 12, "byteStride": 4}
+    ]);
+    json["accessors"] = json!([
+        {"bufferView": 0, "componentType": 5123, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1000, 1000, 0]},
+        {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+        {"bufferView": 2, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"}
+    ]);
+    let mesh = parse_gltf("quantized.gltf", &gltf_text(json.clone(), &bin), None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(mesh.positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y]);
+    assert_eq!(mesh.normals.as_ref().map(|n| n[0]), Some(Vec3::Z));
+    assert_eq!(mesh.normals.as_ref().map(|n| n[2]), Some(-Vec3::Y), "-128 is clamped to -1");
+    json.as_object_mut().map(|o| (o.remove("extensionsUsed"), o.remove("extensionsRequired")));
+    let err = gltf_err(&gltf_text(json, &bin));
+    assert!(matches!(err, SceneError::Malformed { .. }) && element(&err).contains("POSITION"), "{err}");
+}

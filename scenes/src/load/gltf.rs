@@ -1,6 +1,7 @@
 //! glTF 2.0 / GLB loading through the `gltf` crate.
 //!
-//! What is loaded: the default scene (else the first scene, else every root node), walked from
+//! What is loaded: the default scene (else the first scene, as the provenance says, else every
+//! root node; a scene without nodes is empty), walked from
 //! its root nodes with each node's transform applied (parent × child). Every primitive of every
 //! mesh a node refers to is collected. Triangle lists are taken as they are; triangle strips and
 //! fans are converted to lists (glTF 2.0 §3.7.2.1 vertex order); points and lines are skipped.
@@ -19,6 +20,11 @@
 //! keeps the exact byte count of a data URI, so a short one is reported as Truncated.
 //! Sparse accessors are rejected as Unsupported; a node reached twice (a cycle, or two
 //! parents, which glTF forbids) is Malformed.
+//!
+//! Extensions (issue 44): `KHR_mesh_quantization` (what `gltfpack` writes by default) is read —
+//! positions of 8- or 16-bit integers, normalized or not, and normalized integer normals, scaled
+//! back by the node transforms as the extension specifies. Meshopt and Draco compression are
+//! refused by name, with what to do instead; so is glTF 1.0, by its version.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -34,18 +40,23 @@ use crate::mesh::Mesh;
 /// Parses a `.gltf` (JSON) or `.glb` file. `base_dir` resolves external buffer files; data URIs
 /// and the GLB binary chunk need none.
 pub fn parse_gltf(path: &str, bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, SceneError> {
-    let gltf::Gltf { document, blob } = open(path, bytes)?;
+    let Opened { gltf: gltf::Gltf { document, blob }, quantized } = open(path, bytes)?;
     let buffers = load_buffers(path, &document, blob, base_dir)?;
     let name = Path::new(path).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let mut mesh = Mesh::new(name, provenance(path, &document));
     // Keyed by (mesh, primitive): a mesh used by several nodes is listed once, in index order.
     let mut skipped = BTreeMap::new();
-    for (node, transform) in scene_nodes(path, &document)? {
+    let nodes = scene_nodes(path, &document)?;
+    if nodes.is_empty() {
+        let detail = "the scene has no nodes: nothing to trace".to_string();
+        return Err(SceneError::Empty { path: path.into(), detail });
+    }
+    for (node, transform) in nodes {
         let Some(node_mesh) = node.mesh() else { continue };
         for primitive in node_mesh.primitives() {
             let label =
                 format!("{} primitive {}", named("mesh", node_mesh.name(), node_mesh.index()), primitive.index());
-            match read_primitive(path, &label, &primitive, &buffers)? {
+            match read_primitive(path, &label, &primitive, &buffers, quantized)? {
                 Some(part) => append(path, &mut mesh, &part, transform, &node)?,
                 None => {
                     skipped.insert((node_mesh.index(), primitive.index()), (label, primitive.mode()));
@@ -101,11 +112,18 @@ fn named(kind: &str, name: Option<&str>, index: usize) -> String {
     }
 }
 
+/// The file, its generator, and which scene was loaded where the file names no default.
 fn provenance(path: &str, document: &gltf::Document) -> String {
-    match &document.as_json().asset.generator {
-        Some(generator) => format!("{path} (generator: {generator})"),
-        None => path.to_string(),
+    let mut notes = Vec::new();
+    if let Some(generator) = &document.as_json().asset.generator {
+        notes.push(format!("generator: {generator}"));
     }
+    match (document.default_scene(), document.scenes().len()) {
+        (None, 0) => notes.push("no scene: every root node".into()),
+        (None, n) => notes.push(format!("no default scene: the first of {n}")),
+        _ => {}
+    }
+    if notes.is_empty() { path.to_string() } else { format!("{path} ({})", notes.join("; ")) }
 }
 
 fn malformed(path: &str, element: impl Into<String>, detail: impl Into<String>) -> SceneError {
@@ -116,12 +134,71 @@ fn truncated(path: &str, element: impl Into<String>, detail: impl Into<String>) 
     SceneError::Truncated { path: path.into(), location: Location::Element(element.into()), detail: detail.into() }
 }
 
-/// Parses and validates the JSON (or GLB container), guarding the crate's panics first.
-fn open(path: &str, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
-    if bytes.starts_with(b"glTF") {
+/// The extension this loader implements beyond the `gltf` crate (issue 44): quantized positions,
+/// normals and indices, as `gltfpack` writes by default.
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// Extensions whose data this loader cannot decode, each with what to do instead.
+const UNDECODED: [(&str, &str); 3] = [
+    (
+        "EXT_meshopt_compression",
+        "meshopt-compressed buffers are not decoded here; write the file without gltfpack's -c/-cc",
+    ),
+    ("KHR_meshopt_compression", "meshopt-compressed buffers are not decoded here; write the file without compression"),
+    ("KHR_draco_mesh_compression", "Draco-compressed meshes are not decoded here; export the model without Draco"),
+];
+
+/// A glTF opened and validated: the document, its GLB binary chunk, and whether it declares
+/// [`QUANTIZATION`].
+struct Opened {
+    gltf: gltf::Gltf,
+    quantized: bool,
+}
+
+/// Parses and validates the JSON (or GLB container), guarding the crate's panics first. The JSON
+/// is read as a value first, so that what the schema allows and the crate refuses can be mended
+/// (a scene without `nodes` is an empty scene), a glTF 1.0 file is refused by its version, and
+/// the extensions this loader implements or cannot decode are handled by name.
+fn open(path: &str, bytes: &[u8]) -> Result<Opened, SceneError> {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
         check_glb_header(path, bytes)?;
+        let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| open_error(path, e))?;
+        (glb.json, glb.bin.map(std::borrow::Cow::into_owned))
+    } else {
+        (std::borrow::Cow::Borrowed(bytes), None)
+    };
+    let mut value: gltf::json::Value =
+        gltf::json::deserialize::from_slice(&json).map_err(|e| open_error(path, gltf::Error::Deserialize(e)))?;
+    let version = value.pointer("/asset/version").and_then(gltf::json::Value::as_str).unwrap_or("2.0").to_string();
+    if !version.starts_with("2.") {
+        let detail = format!("glTF {version} is not supported: only glTF 2.0 is (convert the file to 2.0)");
+        return Err(SceneError::Unsupported {
+            path: path.into(),
+            location: Location::Element("asset.version".into()),
+            detail,
+        });
     }
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| open_error(path, e))?;
+    for scene in value.get_mut("scenes").and_then(gltf::json::Value::as_array_mut).into_iter().flatten() {
+        if let Some(scene) = scene.as_object_mut() {
+            scene.entry("nodes").or_insert_with(|| gltf::json::Value::Array(Vec::new()));
+        }
+    }
+    let declared = |value: &gltf::json::Value, key: &str| -> Vec<String> {
+        let list = value.get(key).and_then(gltf::json::Value::as_array);
+        list.into_iter().flatten().filter_map(|e| e.as_str().map(String::from)).collect()
+    };
+    let used = [declared(&value, "extensionsUsed"), declared(&value, "extensionsRequired")].concat();
+    if let Some((name, what)) = UNDECODED.iter().find(|(name, _)| used.iter().any(|u| u == name)) {
+        let location = Location::Element(format!("extension {name}"));
+        return Err(SceneError::Unsupported { path: path.into(), location, detail: (*what).to_string() });
+    }
+    let quantized = used.iter().any(|u| u == QUANTIZATION);
+    if let Some(required) = value.get_mut("extensionsRequired").and_then(gltf::json::Value::as_array_mut) {
+        required.retain(|e| e.as_str() != Some(QUANTIZATION));
+    }
+    let root: gltf::json::Root =
+        gltf::json::deserialize::from_value(value).map_err(|e| open_error(path, gltf::Error::Deserialize(e)))?;
+    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(root), blob };
     let json = gltf.document.as_json();
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -133,7 +210,7 @@ fn open(path: &str, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
         }
     }
     let document = gltf::Document::from_json(gltf.document.into_json()).map_err(|e| open_error(path, e))?;
-    Ok(gltf::Gltf { document, blob: gltf.blob })
+    Ok(Opened { gltf: gltf::Gltf { document, blob: gltf.blob }, quantized })
 }
 
 /// A GLB whose header promises more bytes than the file holds was cut short.
@@ -147,6 +224,11 @@ fn check_glb_header(path: &str, bytes: &[u8]) -> Result<(), SceneError> {
         Some(n) if n as usize > bytes.len() => {
             Err(truncated(path, "GLB header", format!("the file is {} bytes, but its header says {n}", bytes.len())))
         }
+        Some(_) if bytes[4..8] != 2u32.to_le_bytes() => {
+            let version = u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
+            let detail = format!("GLB version {version} is not supported: only version 2 (glTF 2.0) is");
+            Err(SceneError::Unsupported { path: path.into(), location: Location::Element("GLB header".into()), detail })
+        }
         Some(_) => Ok(()),
     }
 }
@@ -155,7 +237,11 @@ fn open_error(path: &str, err: gltf::Error) -> SceneError {
     use gltf::binary::Error as Glb;
     match err {
         gltf::Error::Deserialize(e) => {
-            let at = format!("JSON line {} column {}", e.line(), e.column());
+            // A value read back into the schema's types has no position in the text.
+            let at = match e.line() {
+                0 => "JSON document".to_string(),
+                line => format!("JSON line {line} column {}", e.column()),
+            };
             match e.is_eof() {
                 true => truncated(path, at, format!("the JSON ends early: {e}")),
                 false => malformed(path, at, format!("invalid glTF JSON: {e}")),
@@ -353,12 +439,28 @@ const COLOR_TYPES: [(DataType, Dimensions); 6] = [
     (DataType::U16, Dimensions::Vec4),
 ];
 
-/// Reads one primitive into an untransformed mesh; `None` for points and lines.
+/// POSITION's types under [`QUANTIZATION`] besides `float`: 8- and 16-bit integers, normalized or
+/// not (the node transforms scale them back).
+const QUANTIZED_POSITIONS: [(DataType, Dimensions); 5] = [
+    (DataType::F32, Dimensions::Vec3),
+    (DataType::I8, Dimensions::Vec3),
+    (DataType::U8, Dimensions::Vec3),
+    (DataType::I16, Dimensions::Vec3),
+    (DataType::U16, Dimensions::Vec3),
+];
+
+/// NORMAL's types under [`QUANTIZATION`]: `float`, or normalized signed 8- and 16-bit integers.
+const QUANTIZED_NORMALS: [(DataType, Dimensions); 3] =
+    [(DataType::F32, Dimensions::Vec3), (DataType::I8, Dimensions::Vec3), (DataType::I16, Dimensions::Vec3)];
+
+/// Reads one primitive into an untransformed mesh; `None` for points and lines. `quantized`: the
+/// file declares [`QUANTIZATION`], so positions and normals may be integers.
 fn read_primitive(
     path: &str,
     label: &str,
     primitive: &gltf::Primitive,
     buffers: &[Vec<u8>],
+    quantized: bool,
 ) -> Result<Option<Mesh>, SceneError> {
     let mode = primitive.mode();
     if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
@@ -366,9 +468,13 @@ fn read_primitive(
     }
     let element = |what: &str| format!("{label} {what}");
     let accessor = primitive.get(&Semantic::Positions).ok_or_else(|| malformed(path, label, "has no POSITION"))?;
-    check_accessor(path, &element("POSITION"), &accessor, &[(DataType::F32, Dimensions::Vec3)], buffers)?;
+    let (position_types, normal_types): (&[_], &[_]) = match quantized {
+        true => (&QUANTIZED_POSITIONS, &QUANTIZED_NORMALS),
+        false => (&QUANTIZED_POSITIONS[..1], &QUANTIZED_NORMALS[..1]),
+    };
+    check_accessor(path, &element("POSITION"), &accessor, position_types, buffers)?;
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    let positions: Vec<Vec3> = reader.read_positions().map(|it| it.map(Vec3::from).collect()).unwrap_or_default();
+    let positions = read_vec3(&accessor, buffers);
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         let location = Location::Element(element(&format!("POSITION[{i}]")));
         return Err(SceneError::NonFinite { path: path.into(), location, detail: format!("{:?}", positions[i]) });
@@ -400,13 +506,46 @@ fn read_primitive(
             n => Err(malformed(path, element(name), format!("{n} values for {vertex_count} positions"))),
         }
     };
-    if check("NORMAL", Semantic::Normals, &[(DataType::F32, Dimensions::Vec3)])? {
-        part.normals = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+    if check("NORMAL", Semantic::Normals, normal_types)? {
+        part.normals = primitive.get(&Semantic::Normals).map(|a| read_vec3(&a, buffers));
     }
     if check("COLOR_0", Semantic::Colors(0), &COLOR_TYPES)? {
         part.colors = reader.read_colors(0).map(|c| c.into_rgb_f32().map(Vec3::from).collect());
     }
     Ok(Some(part))
+}
+
+/// A three-component accessor [`check_accessor`] has passed, as floats: `float` as stored,
+/// integers as their values, or normalized as glTF 2.0 §3.11 maps them (`c / 127` for a signed
+/// byte, at least −1; `c / 255` unsigned; `c / 32767` and `c / 65535` for 16 bits).
+fn read_vec3(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Vec<Vec3> {
+    let Some(view) = accessor.view() else { return Vec::new() };
+    let Some(buffer) = buffers.get(view.buffer().index()) else { return Vec::new() };
+    let (size, normalized, data_type) = (accessor.size(), accessor.normalized(), accessor.data_type());
+    let stride = view.stride().unwrap_or(size);
+    let start = view.offset() + accessor.offset();
+    let width = size / 3;
+    let component = |b: &[u8]| -> f32 {
+        match (data_type, normalized) {
+            (DataType::F32, _) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            (DataType::I8, false) => f32::from(b[0] as i8),
+            (DataType::I8, true) => (f32::from(b[0] as i8) / 127.0).max(-1.0),
+            (DataType::U8, false) => f32::from(b[0]),
+            (DataType::U8, true) => f32::from(b[0]) / 255.0,
+            (DataType::I16, false) => f32::from(i16::from_le_bytes([b[0], b[1]])),
+            (DataType::I16, true) => (f32::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).max(-1.0),
+            (DataType::U16, false) => f32::from(u16::from_le_bytes([b[0], b[1]])),
+            (DataType::U16, true) => f32::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
+            (DataType::U32, _) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+        }
+    };
+    (0..accessor.count())
+        .map(|i| {
+            let at = start + i * stride;
+            let element = buffer.get(at..at + size).unwrap_or(&[0; 12][..size.min(12)]);
+            Vec3::from_array([0, 1, 2].map(|c| element.get(c * width..).map_or(0.0, component)))
+        })
+        .collect()
 }
 
 /// Triangle lists from a primitive's corner list (glTF 2.0 §3.7.2.1).
