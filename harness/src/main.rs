@@ -87,7 +87,11 @@ fn main() -> ExitCode {
 fn list(what: ListWhat) {
     let all = what == ListWhat::All;
     if all || what == ListWhat::Scenes {
-        println!("scenes (built in; also grass-<N> and paths to .obj/.obj.gz/.gltf/.glb/.ply/.ply.gz/.stl):");
+        println!(
+            "scenes (built in; also grass-<N>, blades-<N> and paths to {}; glTF 2.0 with KHR_mesh_quantization and \
+             meshopt compression, not Draco):",
+            scenes::load::EXTENSIONS.join(", ")
+        );
         for s in scenes::BUILTIN_SCENES {
             println!("  {s}");
         }

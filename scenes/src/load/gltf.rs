@@ -23,8 +23,10 @@
 //!
 //! Extensions (issue 44): `KHR_mesh_quantization` (what `gltfpack` writes by default) is read —
 //! positions of 8- or 16-bit integers, normalized or not, and normalized integer normals, scaled
-//! back by the node transforms as the extension specifies. Meshopt and Draco compression are
-//! refused by name, with what to do instead; so is glTF 1.0, by its version.
+//! back by the node transforms as the extension specifies; meshopt-compressed buffer views
+//! (`EXT_meshopt_compression`, `KHR_meshopt_compression`: `gltfpack -c`) are decoded
+//! ([`super::meshopt`]). Draco compression is refused by name, with what to do instead; so is
+//! glTF 1.0, by its version.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -40,8 +42,8 @@ use crate::mesh::Mesh;
 /// Parses a `.gltf` (JSON) or `.glb` file. `base_dir` resolves external buffer files; data URIs
 /// and the GLB binary chunk need none.
 pub fn parse_gltf(path: &str, bytes: &[u8], base_dir: Option<&Path>) -> Result<Mesh, SceneError> {
-    let Opened { gltf: gltf::Gltf { document, blob }, quantized } = open(path, bytes)?;
-    let buffers = load_buffers(path, &document, blob, base_dir)?;
+    let Opened { gltf: gltf::Gltf { document, blob }, quantized, meshopt } = open(path, bytes)?;
+    let buffers = load_buffers(path, &document, blob, base_dir, &meshopt)?;
     let name = Path::new(path).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let mut mesh = Mesh::new(name, provenance(path, &document));
     // Keyed by (mesh, primitive): a mesh used by several nodes is listed once, in index order.
@@ -138,21 +140,17 @@ fn truncated(path: &str, element: impl Into<String>, detail: impl Into<String>) 
 /// normals and indices, as `gltfpack` writes by default.
 const QUANTIZATION: &str = "KHR_mesh_quantization";
 
-/// Extensions whose data this loader cannot decode, each with what to do instead.
-const UNDECODED: [(&str, &str); 3] = [
-    (
-        "EXT_meshopt_compression",
-        "meshopt-compressed buffers are not decoded here; write the file without gltfpack's -c/-cc",
-    ),
-    ("KHR_meshopt_compression", "meshopt-compressed buffers are not decoded here; write the file without compression"),
-    ("KHR_draco_mesh_compression", "Draco-compressed meshes are not decoded here; export the model without Draco"),
-];
+/// Extensions whose data this loader cannot decode, each with what to do instead (no maintained
+/// Rust crate decodes Draco).
+const UNDECODED: [(&str, &str); 1] =
+    [("KHR_draco_mesh_compression", "Draco-compressed meshes are not decoded here; export the model without Draco")];
 
-/// A glTF opened and validated: the document, its GLB binary chunk, and whether it declares
-/// [`QUANTIZATION`].
+/// A glTF opened and validated: the document, its GLB binary chunk, whether it declares
+/// [`QUANTIZATION`], and its meshopt-compressed views to decode.
 struct Opened {
     gltf: gltf::Gltf,
     quantized: bool,
+    meshopt: super::meshopt::Plan,
 }
 
 /// Parses and validates the JSON (or GLB container), guarding the crate's panics first. The JSON
@@ -193,6 +191,7 @@ fn open(path: &str, bytes: &[u8]) -> Result<Opened, SceneError> {
         return Err(SceneError::Unsupported { path: path.into(), location, detail: (*what).to_string() });
     }
     let quantized = used.iter().any(|u| u == QUANTIZATION);
+    let meshopt = super::meshopt::redirect(&mut value).map_err(|(element, detail)| malformed(path, element, detail))?;
     if let Some(required) = value.get_mut("extensionsRequired").and_then(gltf::json::Value::as_array_mut) {
         required.retain(|e| e.as_str() != Some(QUANTIZATION));
     }
@@ -210,7 +209,7 @@ fn open(path: &str, bytes: &[u8]) -> Result<Opened, SceneError> {
         }
     }
     let document = gltf::Document::from_json(gltf.document.into_json()).map_err(|e| open_error(path, e))?;
-    Ok(Opened { gltf: gltf::Gltf { document, blob: gltf.blob }, quantized })
+    Ok(Opened { gltf: gltf::Gltf { document, blob: gltf.blob }, quantized, meshopt })
 }
 
 /// A GLB whose header promises more bytes than the file holds was cut short.
@@ -267,16 +266,35 @@ fn open_error(path: &str, err: gltf::Error) -> SceneError {
     }
 }
 
-/// Resolves every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
+/// Resolves every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF; a
+/// meshopt fallback buffer holds nothing, and the buffers [`super::meshopt::redirect`] added are
+/// decoded from the file's.
 fn load_buffers(
     path: &str,
     document: &gltf::Document,
     mut blob: Option<Vec<u8>>,
     base_dir: Option<&Path>,
+    meshopt: &super::meshopt::Plan,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
-    let mut buffers = Vec::new();
+    let mut buffers: Vec<Vec<u8>> = Vec::new();
     for buffer in document.buffers() {
         let element = format!("buffer {}", buffer.index());
+        if meshopt.fallbacks.contains(&buffer.index()) {
+            buffers.push(Vec::new());
+            continue;
+        }
+        if let Some(job) = meshopt.jobs.iter().find(|j| j.target == buffer.index()) {
+            let element = format!("bufferViews[{}] (meshopt-compressed)", job.view);
+            let source = match buffers.get(job.source) {
+                Some(source) if !meshopt.fallbacks.contains(&job.source) => source,
+                _ => {
+                    let detail = format!("its compressed bytes name buffer {}, which holds none", job.source);
+                    return Err(malformed(path, element, detail));
+                }
+            };
+            buffers.push(job.decode(source).map_err(|detail| malformed(path, element, detail))?);
+            continue;
+        }
         let data = match buffer.source() {
             gltf::buffer::Source::Bin => {
                 blob.take().ok_or_else(|| malformed(path, &element, "refers to a GLB binary chunk the file lacks"))?

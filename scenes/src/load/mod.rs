@@ -10,6 +10,7 @@
 //! ([`SceneError::TooLarge`]); the harness derives `max_bytes` from its memory budget.
 
 pub mod gltf;
+mod meshopt;
 pub mod obj;
 pub mod ply;
 pub mod stl;
