@@ -6,42 +6,11 @@
 //! installed by `.ci/run`): skipped where it is absent, unless `CI` or
 //! `ACCEL_BENCH_REQUIRE_GLTFPACK=1` is set, where that fails.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use common::{Folder, asset_obj, glb, gltfpack_or_skip, pack};
 use glam::Vec3;
 use scenes::{Scene, SceneError};
-
-fn gltfpack_or_skip() -> Option<&'static str> {
-    let found = Command::new("gltfpack").arg("-h").output().is_ok();
-    let required = std::env::var_os("CI").is_some()
-        || std::env::var("ACCEL_BENCH_REQUIRE_GLTFPACK").is_ok_and(|v| v.trim() == "1");
-    match (found, required) {
-        (true, _) => Some("gltfpack"),
-        (false, true) => panic!("gltfpack is required here (CI or ACCEL_BENCH_REQUIRE_GLTFPACK=1) but not installed"),
-        (false, false) => {
-            eprintln!("skipped: gltfpack is not installed (apt-get install gltfpack)");
-            None
-        }
-    }
-}
-
-/// A folder of its own under the system's temporary folder, removed when the test passes.
-struct Folder(PathBuf);
-
-impl Drop for Folder {
-    fn drop(&mut self) {
-        if !std::thread::panicking() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
-}
-
-fn pack(tool: &str, input: &Path, output: &Path, args: &[&str]) {
-    let out = Command::new(tool).arg("-i").arg(input).arg("-o").arg(output).args(args).output();
-    let out = out.unwrap_or_else(|e| panic!("running gltfpack: {e}"));
-    assert!(out.status.success(), "gltfpack {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-}
 
 /// Whether every triangle of `got` is a triangle of `want` (the same winding, corners within
 /// `tolerance` on every axis), one for one: gltfpack reorders both vertices and triangles. With
@@ -106,13 +75,8 @@ fn with_normals(bunny: &Scene) -> String {
 #[test]
 fn gltfpack_outputs_load_to_the_bunnys_triangles_within_their_quantization() {
     let Some(tool) = gltfpack_or_skip() else { return };
-    let dir = Folder(std::env::temp_dir().join(format!("accel-bench-gltfpack-{}", std::process::id())));
-    std::fs::create_dir_all(&dir.0).unwrap_or_else(|e| panic!("{e}"));
-    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.obj.gz");
-    let gz = std::fs::read(&asset).unwrap_or_else(|e| panic!("{e}"));
-    let text = scenes::load::obj::gunzip("bunny.obj.gz", &gz).unwrap_or_else(|e| panic!("{e}"));
-    let obj = dir.0.join("bunny.obj");
-    std::fs::write(&obj, text).unwrap_or_else(|e| panic!("{e}"));
+    let dir = Folder::new("gltfpack");
+    let obj = asset_obj(&dir, "bunny.obj.gz");
     let bunny = scenes::load_scene(&obj.to_string_lossy()).unwrap_or_else(|e| panic!("{e}"));
     let extent = bunny.mesh.bounds().extent().max_element();
     // Quantized to n bits over the largest extent: a position is off by at most half a step; a
@@ -128,19 +92,19 @@ fn gltfpack_outputs_load_to_the_bunnys_triangles_within_their_quantization() {
         ("meshopt-more.glb", &["-cc"][..], step(14)),
         ("meshopt.gltf", &["-cc"][..], step(14)),
     ] {
-        let out = dir.0.join(file);
+        let out = dir.join(file);
         pack(tool, &obj, &out, args);
         let scene = scenes::load_scene(&out.to_string_lossy()).unwrap_or_else(|e| panic!("{file}: {e}"));
         same_triangles(&scene, &bunny, tolerance, None).unwrap_or_else(|e| panic!("{file} (gltfpack {args:?}): {e}"));
     }
     // Normals: 8-bit by default, so within a step of 2/255 per component (and the octahedral
     // mapping's error on top).
-    let smooth = dir.0.join("smooth.obj");
+    let smooth = dir.join("smooth.obj");
     std::fs::write(&smooth, with_normals(&bunny)).unwrap_or_else(|e| panic!("{e}"));
     let smooth_bunny = scenes::load_scene(&smooth.to_string_lossy()).unwrap_or_else(|e| panic!("{e}"));
     assert!(smooth_bunny.mesh.normals.is_some(), "the OBJ's normals are per vertex");
     for (file, args) in [("normals.glb", &["-c"][..]), ("normals-oct.glb", &["-cc"][..])] {
-        let out = dir.0.join(file);
+        let out = dir.join(file);
         pack(tool, &smooth, &out, args);
         let scene = scenes::load_scene(&out.to_string_lossy()).unwrap_or_else(|e| panic!("{file}: {e}"));
         same_triangles(&scene, &smooth_bunny, step(14), Some(0.03))
@@ -148,7 +112,7 @@ fn gltfpack_outputs_load_to_the_bunnys_triangles_within_their_quantization() {
     }
 }
 
-/// The JSON and binary chunks of a GLB, and a GLB of them (chunks padded to 4 bytes).
+/// The JSON and binary chunks of a GLB.
 fn split_glb(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
     let json_len = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
     let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap_or_else(|e| panic!("{e}"));
@@ -157,33 +121,15 @@ fn split_glb(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
     (json, bytes[bin_at + 8..bin_at + 8 + bin_len].to_vec())
 }
 
-fn join_glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = serde_json::to_vec(json).unwrap_or_default();
-    text.resize(text.len().next_multiple_of(4), b' ');
-    let mut bin = bin.to_vec();
-    bin.resize(bin.len().next_multiple_of(4), 0);
-    let mut out = b"glTF".to_vec();
-    for word in [2, 12 + 8 + text.len() + 8 + bin.len(), text.len()] {
-        out.extend((word as u32).to_le_bytes());
-    }
-    out.extend(b"JSON".iter().chain(&text).chain(&(bin.len() as u32).to_le_bytes()).chain(b"BIN\0").chain(&bin));
-    out
-}
-
 /// A meshopt-compressed file that lies — a count no compressed bytes could produce, a stride or
 /// filter the codec does not take, bytes past its buffer, an unknown mode — is refused naming the
 /// view, without allocating the count; a flipped byte of the compressed data never panics.
 #[test]
 fn lying_or_corrupted_meshopt_views_are_refused_or_loaded_never_a_panic() {
     let Some(tool) = gltfpack_or_skip() else { return };
-    let dir = Folder(std::env::temp_dir().join(format!("accel-bench-meshopt-{}", std::process::id())));
-    std::fs::create_dir_all(&dir.0).unwrap_or_else(|e| panic!("{e}"));
-    let gz = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/teapot.obj.gz"))
-        .unwrap_or_else(|e| panic!("{e}"));
-    let obj = dir.0.join("teapot.obj");
-    std::fs::write(&obj, scenes::load::obj::gunzip("teapot.obj.gz", &gz).unwrap_or_else(|e| panic!("{e}")))
-        .unwrap_or_else(|e| panic!("{e}"));
-    let packed = dir.0.join("teapot.glb");
+    let dir = Folder::new("meshopt");
+    let obj = asset_obj(&dir, "teapot.obj.gz");
+    let packed = dir.join("teapot.glb");
     pack(tool, &obj, &packed, &["-cc"]);
     let whole = std::fs::read(&packed).unwrap_or_else(|e| panic!("{e}"));
     let parse = |bytes: &[u8]| scenes::load::gltf::parse_gltf("meshopt.glb", bytes, None);
@@ -203,7 +149,7 @@ fn lying_or_corrupted_meshopt_views_are_refused_or_loaded_never_a_panic() {
         if let Some(object) = lying.pointer_mut(&ext).and_then(serde_json::Value::as_object_mut) {
             object.insert(key.into(), value);
         }
-        match parse(&join_glb(&lying, &bin)) {
+        match parse(&glb(&lying, &bin)) {
             Err(SceneError::Malformed { detail, location, .. }) => {
                 let at = format!("bufferViews[{view}]");
                 assert!(detail.contains(says) && location.to_string().contains(&at), "{key}: {location}: {detail}");
@@ -214,6 +160,6 @@ fn lying_or_corrupted_meshopt_views_are_refused_or_loaded_never_a_panic() {
     for i in 0..bin.len().min(4096) {
         let mut bad = bin.clone();
         bad[i] ^= 0xA5;
-        let _ = parse(&join_glb(&json, &bad));
+        let _ = parse(&glb(&json, &bad));
     }
 }

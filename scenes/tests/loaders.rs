@@ -1,9 +1,12 @@
 //! The scene-file loaders: good files load with the right geometry, and every kind of bad file
 //! gets its specific error naming the file and the line (OBJ) or element (glTF).
 
+mod common;
+
 use std::io::Write;
 use std::path::Path;
 
+use common::glb;
 use glam::{Mat4, Quat, Vec3};
 use scenes::load::gltf::parse_gltf;
 use scenes::load::load_bytes;
@@ -341,21 +344,6 @@ fn base64(bytes: &[u8]) -> String {
 fn gltf_text(mut json: Value, bin: &[u8]) -> Vec<u8> {
     json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", base64(bin)));
     serde_json::to_vec_pretty(&json).unwrap_or_default()
-}
-
-/// A `.glb`: 12-byte header, JSON chunk (space-padded), BIN chunk (zero-padded).
-fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
-    let pad = |mut v: Vec<u8>, fill: u8| {
-        v.resize(v.len().next_multiple_of(4), fill);
-        v
-    };
-    let (json, bin) = (pad(serde_json::to_vec(json).unwrap_or_default(), b' '), pad(bin.to_vec(), 0));
-    let mut out = b"glTF".to_vec();
-    for word in [2, 12 + 8 + json.len() + 8 + bin.len(), json.len()] {
-        out.extend((word as u32).to_le_bytes());
-    }
-    out.extend(b"JSON".iter().chain(&json).chain(&(bin.len() as u32).to_le_bytes()).chain(b"BIN\0").chain(&bin));
-    out
 }
 
 fn gltf_err(bytes: &[u8]) -> SceneError {

@@ -4,8 +4,11 @@
 //! same input and reports the same hits — and cut, corrupted or lying files get a clear error,
 //! never a panic or an allocation the file does not back.
 
+mod common;
+
 use std::io::Write;
 
+use common::raw_mesh;
 use glam::Vec3;
 use ply_rs_bw::ply::{DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType, ScalarType};
 use ply_rs_bw::writer::Writer;
@@ -14,14 +17,6 @@ use scenes::{Location, Mesh, Scene, SceneError};
 
 fn shipped(name: &str) -> Scene {
     scenes::load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-/// A shipped asset's mesh as its OBJ holds it, degenerate triangles included (a scene drops them).
-fn raw_mesh(file: &str) -> Mesh {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(file);
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let text = scenes::load::obj::gunzip(file, &bytes).unwrap_or_else(|e| panic!("{e}"));
-    scenes::load::obj::parse_obj(file, &text).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The mesh as a PLY file of `encoding`: float positions, faces as `list uchar int`, plus a

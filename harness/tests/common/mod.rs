@@ -2,8 +2,11 @@
 //! foreground, or in the background to be watched and killed), fresh temporary folders, JSON files.
 #![allow(dead_code)] // each test binary uses its own subset
 
-use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+/// The loaders' test helpers: temporary folders, the shipped assets, gltfpack.
+#[path = "../../../scenes/tests/common/mod.rs"]
+pub mod files;
+
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -75,40 +78,10 @@ pub fn stderr(o: &Output) -> String {
 
 /// A fresh folder for one test, removed when the test passes; a failed test's is kept to look
 /// into.
-pub struct TempDir(PathBuf);
+pub type TempDir = files::Folder;
 
 pub fn temp_dir(name: &str) -> TempDir {
-    let dir = std::env::temp_dir().join(format!("accel-bench-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    TempDir(dir)
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        if !std::thread::panicking() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
-}
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl AsRef<Path> for TempDir {
-    fn as_ref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl AsRef<OsStr> for TempDir {
-    fn as_ref(&self) -> &OsStr {
-        self.0.as_os_str()
-    }
+    files::Folder::new(&format!("cli-{name}"))
 }
 
 /// A small run's arguments: `scenes` × `structures` at level 6, tiny frames, no images.
