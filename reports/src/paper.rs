@@ -495,17 +495,16 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
         claim(text, expected, ours, ok);
     }
     if !s.baseline_superlinear {
-        let below = |f: &dyn Fn(&Row) -> [f64; 2]| rows.iter().filter(|r| f(r)[1] < f(r)[0]).count();
         let n = rows.len();
-        for (what, count) in
-            [("cells", below(&|r| r.cells)), ("pointers", below(&|r| r.pointers)), ("build time", below(&|r| r.build))]
-        {
-            let text = match what {
-                "build time" => format!("{ml} builds faster than {bl}"),
-                _ => format!("{ml} has fewer {what} than {bl}"),
+        for quantity in [Quantity::Cells, Quantity::Pointers, Quantity::BuildTime] {
+            let count = rows.iter().filter(|r| quantity.of(r)[1] < quantity.of(r)[0]).count();
+            let text = match quantity {
+                Quantity::BuildTime => format!("{ml} builds faster than {bl}"),
+                Quantity::Cells => format!("{ml} has fewer cells than {bl}"),
+                Quantity::Pointers => format!("{ml} has fewer pointers than {bl}"),
             };
             let held = count == n;
-            let cause = if held { None } else { deeper_levels(&rows, what, bl, ml) };
+            let cause = if held { None } else { deeper_levels(&rows, quantity, bl, ml) };
             let ours = cause.map_or(format!("at {count} of {n}"), |c| format!("at {count} of {n} ({c})"));
             claim(text, format!("at every N ({n})"), ours, held);
         }
@@ -548,11 +547,30 @@ fn work_beside(org: &Case, other: Option<&Case>, held: bool) -> String {
     }
 }
 
+/// What Fig. 2 compares between the two grids at each N.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Quantity {
+    Cells,
+    Pointers,
+    BuildTime,
+}
+
+impl Quantity {
+    /// The baseline's and the method's value in `row`.
+    fn of(self, row: &Row) -> [f64; 2] {
+        match self {
+            Quantity::Cells => row.cells,
+            Quantity::Pointers => row.pointers,
+            Quantity::BuildTime => row.build,
+        }
+    }
+}
+
 /// Where the method's cells (or leaf references) come from against the baseline's, from the
 /// levels both record: how deep each goes, what the method's levels down to the baseline's depth
 /// hold per triangle against the baseline's whole, and what its deeper levels add, as ranges
 /// over the rows; for build time, the cells built beside the depth. `None` without levels.
-fn deeper_levels(rows: &[Row], what: &str, bl: &str, ml: &str) -> Option<String> {
+fn deeper_levels(rows: &[Row], quantity: Quantity, bl: &str, ml: &str) -> Option<String> {
     if rows.iter().any(|r| r.levels.iter().any(Vec::is_empty)) {
         return None;
     }
@@ -563,11 +581,11 @@ fn deeper_levels(rows: &[Row], what: &str, bl: &str, ml: &str) -> Option<String>
     };
     let depth = |i: usize| range(rows.iter().map(|r| r.levels[i].len() as f64).collect(), 0);
     let deep = format!("{ml} goes {} levels deep, {bl} {}", depth(1), depth(0));
-    if what == "build time" {
+    if quantity == Quantity::BuildTime {
         let cells = range(rows.iter().map(|r| r.cells[1] / r.cells[0]).collect(), 2);
         return Some(format!("{deep}, with {cells}× its cells"));
     }
-    let pick = |l: &(f64, f64)| if what == "cells" { l.0 } else { l.1 };
+    let pick = |l: &(f64, f64)| if quantity == Quantity::Cells { l.0 } else { l.1 };
     // Folded from +0.0: an empty `sum` of floats is −0.0, which would print as "-0.00".
     let per_triangle = |levels: &[(f64, f64)], n: f64| levels.iter().map(pick).fold(0.0, |a, b| a + b) / n;
     let (mut top, mut base, mut below) = (Vec::new(), Vec::new(), Vec::new());
@@ -578,7 +596,7 @@ fn deeper_levels(rows: &[Row], what: &str, bl: &str, ml: &str) -> Option<String>
         top.push(per_triangle(&m[..d], r.n));
         below.push(per_triangle(&m[d..], r.n));
     }
-    let unit = if what == "cells" { "cells" } else { "leaf references" };
+    let unit = if quantity == Quantity::Cells { "cells" } else { "leaf references" };
     Some(format!(
         "{deep}: {ml}'s levels down to {bl}'s depth hold {} {unit} per triangle against {bl}'s {}, and its deeper \
          levels add {}",
