@@ -1,5 +1,5 @@
 //! Records the optimisation level the harness is compiled with, so it can refuse to time
-//! unoptimised code (DESIGN.md §1) and record the profile in every result file.
+//! unoptimised code (docs/design.md §1) and record the profile in every result file.
 
 fn main() {
     let opt = std::env::var("OPT_LEVEL").unwrap_or_else(|_| "?".into());

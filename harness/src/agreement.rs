@@ -1,4 +1,4 @@
-//! Agreement of a render's primary hits with a reference (DESIGN.md §8 `agreement`).
+//! Agreement of a render's primary hits with a reference (docs/design.md §8 `agreement`).
 
 use kernels::cpu::brute_force;
 use kernels::cpu::render::{Frame, Sample};

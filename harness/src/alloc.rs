@@ -1,5 +1,5 @@
 //! A global allocator that counts live heap bytes and their high-water mark, for
-//! `build.peak_bytes` (DESIGN.md §8): the most memory a build held at once above its start.
+//! `build.peak_bytes` (docs/design.md §8): the most memory a build held at once above its start.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -1,4 +1,4 @@
-//! The command line (DESIGN.md §7): `run` (the default), `compare`, `merge`, `report`, `list`;
+//! The command line (docs/design.md §7): `run` (the default), `compare`, `merge`, `report`, `list`;
 //! presets fill in whatever the user does not say.
 
 use std::path::PathBuf;
@@ -144,7 +144,7 @@ pub enum Preset {
     /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,
     /// renders three times. Long: about 40 minutes and 9 GB on 2 cores.
     VoxelGrids,
-    /// Every reproduction of DESIGN.md §9 in one run and one report, which opens with "Paper
+    /// Every reproduction of docs/design.md §9 in one run and one report, which opens with "Paper
     /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,
     /// org-table1, svdag-tables, svdag-shadow, svdag-temporal and esvo-beam, one after the other,
     /// each with its own settings. About 16 minutes and 4 GB on 2 cores, scaled (svdag-shadow to 8192³
@@ -154,7 +154,7 @@ pub enum Preset {
 }
 
 /// The paper preset's parts in the order they run: each a preset of its own, with what it
-/// reproduces (DESIGN.md §9).
+/// reproduces (docs/design.md §9).
 pub const PAPER_PARTS: &[(Preset, &str)] = &[
     (Preset::OrgFig1, "Seed 002 Fig. 1: Eq. 1 against Algorithm 2 on random thin triangles"),
     (Preset::OrgFig2, "Seed 002 Fig. 2: RG against ORG over rising triangle counts"),

@@ -1,4 +1,4 @@
-//! `harness compare NEW BASE` (DESIGN.md §7): loads both runs and the thresholds, prints the
+//! `harness compare NEW BASE` (docs/design.md §7): loads both runs and the thresholds, prints the
 //! table of changes and the verdict. The judgement itself is `reports::compare`.
 
 use anyhow::{Context, Result};

@@ -1,4 +1,4 @@
-//! The GPU rows of a case (DESIGN.md §5, §8): one structure's primary rays through its WGSL kernel
+//! The GPU rows of a case (docs/design.md §5, §8): one structure's primary rays through its WGSL kernel
 //! on the run's adapter — upload, warm-up, timed reps (timestamp queries), a counted dispatch for
 //! steps per ray — checked pixel by pixel against the same structure's CPU frame.
 

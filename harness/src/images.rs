@@ -1,4 +1,4 @@
-//! The images of a case (DESIGN.md §8): the shaded render, its traversal steps per pixel (raw
+//! The images of a case (docs/design.md §8): the shaded render, its traversal steps per pixel (raw
 //! 16-bit counts, which the report colours on one scale per scene), and — for a primary render
 //! checked against the reference's frame — where their hits differ; each beside its thumbnail
 //! (`reports::images::thumb_path`).

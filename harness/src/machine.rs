@@ -1,4 +1,4 @@
-//! The `machine` and `git` records of a result file (DESIGN.md §8).
+//! The `machine` and `git` records of a result file (docs/design.md §8).
 
 use std::process::Command;
 

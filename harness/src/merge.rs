@@ -1,4 +1,4 @@
-//! `harness merge RUN… --out DIR` (DESIGN.md §8): results from several machines in one report.
+//! `harness merge RUN… --out DIR` (docs/design.md §8): results from several machines in one report.
 //! The merging is `reports::merge`; here the files are read, the images copied under
 //! `images/<tag>/`, and results.json, report.md and report.html written.
 

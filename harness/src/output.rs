@@ -524,7 +524,7 @@ mod tests {
         dir
     }
 
-    /// The default preset's shape (DESIGN.md §7): 14 scenes × 12 structures at 512×512, every
+    /// The default preset's shape (docs/design.md §7): 14 scenes × 12 structures at 512×512, every
     /// case with a shaded image, a heat map and a difference view. One real render pair (the
     /// dragon through `svo` at 2⁷, checked against `bvh`) goes through the run's image pipeline,
     /// and its files stand for every case's: the page inlines one thumbnail per image, so its size

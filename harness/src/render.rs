@@ -1,4 +1,4 @@
-//! `harness render` (DESIGN.md §7): images only — for scenes and structures at any size, the
+//! `harness render` (docs/design.md §7): images only — for scenes and structures at any size, the
 //! shaded render, its traversal steps per pixel on one scale per scene, and where its primary
 //! hits differ from the reference's; nothing is timed. For a look at a structure without a run.
 

@@ -538,7 +538,7 @@ fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Optio
         .collect()
 }
 
-/// Refuses to time a build without optimisation unless told to (DESIGN.md §1).
+/// Refuses to time a build without optimisation unless told to (docs/design.md §1).
 fn check_optimised(allow: bool) -> Result<()> {
     let opt = env!("ACCEL_BENCH_OPT_LEVEL");
     if matches!(opt, "0" | "1") && !allow {
@@ -625,7 +625,7 @@ struct SceneRun<'a> {
     triangles: Arc<[Triangle]>,
     load_ms: f64,
     /// The reference structure, once built: every other structure's renders are timed in
-    /// alternation with its renders (paired timing, DESIGN.md §8).
+    /// alternation with its renders (paired timing, docs/design.md §8).
     reference: Option<Box<dyn Accel>>,
     /// The reference structure's primary frame, once rendered.
     reference_frame: Option<Frame>,

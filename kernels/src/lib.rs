@@ -1,4 +1,4 @@
-//! Traversal kernels over each structure's layout (DESIGN.md §5).
+//! Traversal kernels over each structure's layout (docs/design.md §5).
 //!
 //! | structure | CPU kernel | WGSL kernel |
 //! |---|---|---|
@@ -40,7 +40,7 @@ pub use registry::{
 };
 pub use stats::{Counters, LEVEL_STEPS, MAX_STEPS, NoStats, Stats};
 
-/// The nearest intersection found along a ray (DESIGN.md §3).
+/// The nearest intersection found along a ray (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Distance along the ray, in units of its direction.

@@ -10,7 +10,7 @@ pub trait Accel: Structure + Traverse {}
 impl<T: Structure + Traverse> Accel for T {}
 
 pub struct StructureEntry {
-    /// The name on the command line and in results (DESIGN.md §2).
+    /// The name on the command line and in results (docs/design.md §2).
     pub name: &'static str,
     /// `triangle` structures index the mesh; `voxel` structures index its voxelisation.
     pub family: &'static str,

@@ -1,4 +1,4 @@
-//! Per-ray traversal counters (DESIGN.md §3). Kernels are generic over [`Stats`]: the timed path
+//! Per-ray traversal counters (docs/design.md §3). Kernels are generic over [`Stats`]: the timed path
 //! uses [`NoStats`], whose methods compile to nothing; the counting path uses [`Counters`].
 
 use std::ops::AddAssign;
@@ -63,7 +63,7 @@ impl Stats for NoStats {
     fn add(&mut self, _counters: &Counters) {}
 }
 
-/// The deterministic per-ray counts of DESIGN.md §3, summed over however many rays.
+/// The deterministic per-ray counts of docs/design.md §3, summed over however many rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
     pub steps: u64,

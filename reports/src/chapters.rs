@@ -2,7 +2,7 @@
 //! preset) has a chapter per part, each drawn as a run of its own (its at-a-glance matrix,
 //! reproduction, scaling studies and scenes). Every chapter's reproductions record their claims,
 //! which the report's first section, "Paper results at a glance", lists with links to their
-//! tables (DESIGN.md §9).
+//! tables (docs/design.md §9).
 
 use std::fmt::Write;
 
@@ -99,7 +99,7 @@ pub fn glance(chapters: &[Chapter]) -> String {
     let _ = writeln!(
         out,
         "Every claim this run checks, one row per claim with each subject it was checked on (✓ held, ✗ not). \
-         *paper* rows are the seeds' claims (DESIGN.md §9), *target* rows an issue's goal for our implementation. \
+         *paper* rows are the seeds' claims (docs/design.md §9), *target* rows an issue's goal for our implementation. \
          {held} of {} claims held on every subject. Each links to its table. A claim marked *not like with like* \
          sets our figure beside one measured under other conditions (another processor, another counting \
          convention), and says which; every other claim compares like with like.\n",

@@ -1,4 +1,4 @@
-//! The papers' claims as data (DESIGN.md §9): every reproduction section records each claim it
+//! The papers' claims as data (docs/design.md §9): every reproduction section records each claim it
 //! checks — what the paper (or an issue's target) says, what we measured, held or not — beside the
 //! Markdown line it writes, so that the report's "Paper results at a glance" lists the same
 //! verdicts as the tables below it, each linked to the table it comes from.

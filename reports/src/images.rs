@@ -1,4 +1,4 @@
-//! The images of a render (DESIGN.md §8) and their thumbnails: the shaded image, the traversal
+//! The images of a render (docs/design.md §8) and their thumbnails: the shaded image, the traversal
 //! steps per pixel (kept as raw 16-bit counts, so that the report can colour every structure of a
 //! scene on one shared scale), and where its primary hits differ from the reference's.
 //!

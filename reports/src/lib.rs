@@ -1,4 +1,4 @@
-//! Results and reports (DESIGN.md §7–8): the `accel-bench/1` schema shared by the harness and the
+//! Results and reports (docs/design.md §7–8): the `accel-bench/1` schema shared by the harness and the
 //! report writers; the Markdown and self-contained HTML reports with their plots, scaling studies
 //! and paper reproductions; PNG images; and the pure logic of `harness compare` and `harness merge`.
 

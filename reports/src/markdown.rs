@@ -1,4 +1,4 @@
-//! `report.md` (DESIGN.md §8): the run's header, the paper reproductions, the scaling exponents
+//! `report.md` (docs/design.md §8): the run's header, the paper reproductions, the scaling exponents
 //! and one summary table per scene. `report.html` (see [`crate::html`]) adds the charts.
 
 use std::fmt::Write;

@@ -1,4 +1,4 @@
-//! `harness merge` (DESIGN.md §8): runs from several machines — a GPU box and a laptop, say —
+//! `harness merge` (docs/design.md §8): runs from several machines — a GPU box and a laptop, say —
 //! combined into one result file. Every case carries its machine's tag ([`Case::machine`]), every
 //! run its machine, git and settings records ([`Results::merged`]), so one report shows them side
 //! by side and `harness compare` can still pair each case with its own machine's reference.

@@ -1,4 +1,4 @@
-//! Paper results reproduced from a run (DESIGN.md §9): Fig. 1, Fig. 2 and Table 1 of seed 002
+//! Paper results reproduced from a run (docs/design.md §9): Fig. 1, Fig. 2 and Table 1 of seed 002
 //! (Li & Wang 2011), each in the paper's layout, with fitted growth exponents; seed 001's SVDAG
 //! tables ([`crate::svdag_tables`]); ESVO at scale (blocks, bytes, build peak, LOD; issue 18);
 //! and, for any run with ESVO cases, its bytes per voxel beside seed 000's budget. The papers'

@@ -1,4 +1,4 @@
-//! The report's charts (DESIGN.md §8), drawn with plotters into SVG strings that `report.html`
+//! The report's charts (docs/design.md §8), drawn with plotters into SVG strings that `report.html`
 //! inlines: grouped bars (build and render times, with min–max whiskers), stacked bars (memory by
 //! component), log–log scaling plots with the fitted exponent in the legend, and per scene the
 //! trade-off a user chooses on, Mrays/s against memory. Legends sit beside the plot, never over

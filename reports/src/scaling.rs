@@ -1,4 +1,4 @@
-//! Scaling studies drawn from a run (DESIGN.md §8): how build time and memory grow with the
+//! Scaling studies drawn from a run (docs/design.md §8): how build time and memory grow with the
 //! triangle count across the scenes of one family (`dragon-11k` … `dragon`, `grass-1k` …
 //! `grass-100k`), and with the resolution `2^L` for voxel structures, each series with its fitted
 //! log–log exponent ([`growth_exponent`], the same fit as the paper reproductions).

@@ -1,4 +1,4 @@
-//! The `accel-bench/1` result schema (DESIGN.md §8). One [`Results`] per run, one [`Case`] per
+//! The `accel-bench/1` result schema (docs/design.md §8). One [`Results`] per run, one [`Case`] per
 //! (scene, structure); each case holds one [`RenderStats`] per backend and workload.
 
 use std::collections::BTreeMap;
@@ -17,7 +17,7 @@ pub struct Results {
     pub git: Git,
     pub settings: Settings,
     pub cases: Vec<Case>,
-    /// Set by `harness merge` (DESIGN.md §8): the runs this file combines, one per machine tag;
+    /// Set by `harness merge` (docs/design.md §8): the runs this file combines, one per machine tag;
     /// each case names its run in [`Case::machine`]. Empty for a single run.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub merged: Vec<MergedRun>,
@@ -478,7 +478,7 @@ pub struct BuildStats {
     /// Most heap bytes held at once during one build, above what was held before it.
     pub peak_bytes: u64,
     /// The reference structure's build, timed in alternation with this one's reps so that both see
-    /// the same machine load; `harness compare` gates on the ratio of the two (DESIGN.md §8).
+    /// the same machine load; `harness compare` gates on the ratio of the two (docs/design.md §8).
     /// `None` for the reference itself and in files written before paired timing.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub reference_timing: Option<Timing>,
@@ -573,7 +573,7 @@ impl RenderStats {
     }
 }
 
-/// What a GPU row records beyond the common fields (DESIGN.md §5, §8).
+/// What a GPU row records beyond the common fields (docs/design.md §5, §8).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct GpuStats {
     /// Adapter name, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)` or `NVIDIA GeForce RTX 4090`.

@@ -1,4 +1,4 @@
-//! `harness compare`'s judgement on the fixture run (DESIGN.md §7–8): an unchanged rerun and a
+//! `harness compare`'s judgement on the fixture run (docs/design.md §7–8): an unchanged rerun and a
 //! uniformly slower machine pass; doubled memory or steps, one structure slowed down, or a lost
 //! case fail. The fixture predates machine probes, so timings are judged here with the gate
 //! forced on (`TimingGate::Always`); `tests/gate.rs` covers the gate's decision on recorded runs.

@@ -1,6 +1,6 @@
 //! The paper preset's report on a fixture of a real run (`harness run --preset paper` on a 2-core
 //! VM, 17 minutes; timing samples stripped; `fixtures/paper.json.gz`): it opens with
-//! "Paper results at a glance", which lists every claim of DESIGN.md §9 that has an
+//! "Paper results at a glance", which lists every claim of docs/design.md §9 that has an
 //! implementation, each held or not held and linked to a table that exists in the page.
 
 use std::io::Read;
@@ -16,7 +16,7 @@ fn fixture() -> Results {
     serde_json::from_str(&text).expect("the fixture parses")
 }
 
-/// DESIGN.md §9's results that claim something, as the glance table names their source.
+/// docs/design.md §9's results that claim something, as the glance table names their source.
 const CLAIMED: [&str; 10] = [
     "seed 002 Fig. 1",
     "seed 002 Fig. 2",
@@ -65,7 +65,7 @@ fn the_glance_comes_first_and_lists_every_claimed_result() {
             assert!(row.contains("| **held**") || row.contains("| **not held**"), "no verdict: {row}");
         }
     }
-    // Table 3 and Table 6 claim nothing (DESIGN.md §9: compare our times); their tables are there.
+    // Table 3 and Table 6 claim nothing (docs/design.md §9: compare our times); their tables are there.
     assert!(md.contains("Table 3 — SVO → SVDAG time") && md.contains("Table 6 — CPU frame rates"));
     // One row per claim of every chapter, none lost in the grouping.
     let chapters = chapters::chapters(&r);

@@ -1,4 +1,4 @@
-//! Report generation on the fixture run (DESIGN.md §8): `report.md` and `report.html` carry the
+//! Report generation on the fixture run (docs/design.md §8): `report.md` and `report.html` carry the
 //! fixture's values, the HTML has its charts and images inline and no external reference.
 
 use reports::html::{Shot, Shots, png_data_uri};

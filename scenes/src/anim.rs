@@ -1,4 +1,4 @@
-//! Animated scenes (DESIGN.md §6): deterministic frames for the temporal SVDAG.
+//! Animated scenes (docs/design.md §6): deterministic frames for the temporal SVDAG.
 //!
 //! The temporal SVDAG voxelises every frame of an animation into one voxel grid and merges the
 //! frames into one DAG, sharing the subtrees that do not move. That works only if the frames agree

@@ -1,4 +1,4 @@
-//! The scene names of DESIGN.md §2, resolved to shipped assets, procedural generators or files.
+//! The scene names of docs/design.md §2, resolved to shipped assets, procedural generators or files.
 
 use std::path::Path;
 
@@ -30,8 +30,8 @@ pub const BUILTIN_SCENES: &[&str] = &[
     "room",
 ];
 
-/// A shipped asset: gzipped OBJ bytes compiled into the binary, so the project runs anywhere
-/// without `../shared`. Provenance is the file's first line; licences are in `scenes/assets/NOTICE`.
+/// A shipped asset: gzipped OBJ bytes compiled into the binary, so the binary runs anywhere, from
+/// any working directory. Provenance is the file's first line; licences are in `scenes/assets/NOTICE`.
 struct Asset {
     name: &'static str,
     file: &'static str,

@@ -1,4 +1,4 @@
-//! The pinhole camera of DESIGN.md §3: one ray per pixel through the pixel centre.
+//! The pinhole camera of docs/design.md §3: one ray per pixel through the pixel centre.
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -16,7 +16,7 @@ pub struct CameraSpec {
 }
 
 impl CameraSpec {
-    /// The canonical camera for a mesh without its own (DESIGN.md §3): bounding-box centre `c`,
+    /// The canonical camera for a mesh without its own (docs/design.md §3): bounding-box centre `c`,
     /// diagonal `d`; eye = `c + d·(0.55, 0.40, 0.85)`, looking at `c`, up +Y, vertical fov 45°.
     /// Reference numbers elsewhere use exactly this camera.
     /// A point or microscopic scene is framed as [`Aabb::framed`] says.

@@ -1,6 +1,6 @@
 //! Meshes, scenes and cameras: the input every acceleration structure is built from.
 //!
-//! Spec: DESIGN.md §3 (shared contracts) and §6 (scenes). Loaders live in [`load`], the
+//! Spec: docs/design.md §3 (shared contracts) and §6 (scenes). Loaders live in [`load`], the
 //! deterministic procedural scenes in [`procedural`], and [`builtin`] resolves the scene names
 //! the command line uses (`bunny`, `dragon-48k`, `grass-10k`, a file path, …). [`anim`] holds the
 //! animated scenes, whose frames share one topology and one bounding box (`kitchen-anim@f3`).

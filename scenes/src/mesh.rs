@@ -1,4 +1,4 @@
-//! An indexed triangle mesh (DESIGN.md §3).
+//! An indexed triangle mesh (docs/design.md §3).
 
 use foldhash::fast::FixedState;
 use glam::{DVec3, Mat4, Vec3};

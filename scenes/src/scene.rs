@@ -21,7 +21,7 @@ pub struct Object {
     pub first_triangle: u32,
     pub triangle_count: u32,
     /// True when the object is a closed (watertight, two-manifold) surface: shadow SVDAG's
-    /// double depth maps rely on it (DESIGN.md §4.4).
+    /// double depth maps rely on it (docs/design.md §4.4).
     pub closed: bool,
 }
 
@@ -39,7 +39,7 @@ pub struct Scene {
     pub light: Option<Vec3>,
     /// The animation this scene is a frame of ([`Animation::frame`]), or `None` for a static
     /// scene. Every frame of one animation has the same triangles, objects and bounds; only vertex
-    /// positions move, so the temporal SVDAG can voxelise all frames into one grid (DESIGN.md §6).
+    /// positions move, so the temporal SVDAG can voxelise all frames into one grid (docs/design.md §6).
     /// Anything that changes the triangles (`@sub<k>`) drops it.
     pub animation: Option<Animation>,
     /// Triangles dropped when the scene was loaded ([`Scene::drop_unusable_triangles`]).
@@ -75,7 +75,7 @@ impl Scene {
         self.mesh.bounds()
     }
 
-    /// The camera to render with: the scene's own, or the canonical one of DESIGN.md §3.
+    /// The camera to render with: the scene's own, or the canonical one of docs/design.md §3.
     pub fn camera_spec(&self) -> CameraSpec {
         self.camera.unwrap_or_else(|| CameraSpec::canonical(self.bounds()))
     }

@@ -1,4 +1,4 @@
-//! Acceleration-structure builders and their exact memory layouts (DESIGN.md §2–4).
+//! Acceleration-structure builders and their exact memory layouts (docs/design.md §2–4).
 //!
 //! Each structure is one module holding its builder and its layout; the layout is exactly what
 //! the traversal kernels in the `kernels` crate read (and, for the GPU, upload), so the memory a

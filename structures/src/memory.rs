@@ -1,4 +1,4 @@
-//! Memory accounting shared by every structure (DESIGN.md §3, §8: `memory.components`, N_c, N_p).
+//! Memory accounting shared by every structure (docs/design.md §3, §8: `memory.components`, N_c, N_p).
 
 use serde::Serialize;
 

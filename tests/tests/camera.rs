@@ -1,4 +1,4 @@
-//! The canonical camera of DESIGN.md §3 and its corner rays.
+//! The canonical camera of docs/design.md §3 and its corner rays.
 
 use glam::Vec3;
 use scenes::{Aabb, Camera, CameraSpec};

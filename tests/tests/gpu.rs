@@ -1,4 +1,4 @@
-//! GPU kernels against their CPU twins (DESIGN.md §5 "GPU"): on every built-in scene, every
+//! GPU kernels against their CPU twins (docs/design.md §5 "GPU"): on every built-in scene, every
 //! structure of the registry that has a GPU program renders the canonical camera's 256×256 primary
 //! rays on both; hit/miss must agree on ≥ 99.9 % of the pixels and `t` within 1e-4 relative where
 //! both hit. Structures without a GPU program are listed as skipped; they are covered here the

@@ -1,7 +1,7 @@
 //! CPU kernel of the grid family (UG, RG, RG-2, ORG share one layout, `structures::grid::layout`):
 //! a hierarchical 3D-DDA — Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing"
 //! (Eurographics 1987) — per level, descending into a sub-grid with the ray clipped to the parent
-//! cell's span (DESIGN.md §4.5 "Traversal", seed 002). WGSL twin: `gpu/grid.wgsl`.
+//! cell's span (docs/design.md §4.5 "Traversal", seed 002). WGSL twin: `gpu/grid.wgsl`.
 //!
 //! **Empty-space skipping.** Each grid of more than one brick (4×4×4 cells, `layout`) is walked
 //! by two DDAs: one over its bricks, which steps an empty brick (occupancy bit clear) whole, and,
@@ -52,7 +52,7 @@ use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
-/// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (DESIGN.md §4.5), the cap the
+/// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (docs/design.md §4.5), the cap the
 /// builder enforces.
 const MAX_DEPTH: usize = structures::grid::MAX_DEPTH as usize;
 

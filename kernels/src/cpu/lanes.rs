@@ -1,7 +1,7 @@
 //! The SIMD layer of the CPU kernels (issue 30): 4-lane `f32` vectors and masks over `std::arch`
 //! SSE, and 8-lane ones over AVX, with exactly the IEEE semantics of the scalar code they stand in for.
 //!
-//! Bit-identical to the scalar kernels by construction (`../shared/research/simd_parity.md` §4):
+//! Bit-identical to the scalar kernels by construction (docs/design.md §5 "SIMD"):
 //! - only `+ − × ÷` and comparisons, each correctly rounded in IEEE single precision as the
 //!   scalar operations are; no fused multiply-add (Rust never contracts `a * b + c` either), no
 //!   approximate reciprocal;

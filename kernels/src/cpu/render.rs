@@ -1,4 +1,4 @@
-//! The CPU renderer (DESIGN.md §5): rayon over 8×8 pixel tiles, one primary ray per pixel through
+//! The CPU renderer (docs/design.md §5): rayon over 8×8 pixel tiles, one primary ray per pixel through
 //! its centre, optional shadow or ambient-occlusion rays from each primary hit with a fixed seed.
 //!
 //! The frame is stored tile-major (tile after tile, 64 pixels each) so every rayon task writes one

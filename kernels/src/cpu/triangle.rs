@@ -1,6 +1,6 @@
 //! The watertight ray/triangle test of Woop, Benthin & Wald, "Watertight Ray/Triangle
 //! Intersection", JCGT 2(1), 2013 — shared by every triangle structure and the reference, so
-//! differences between structures are traversal differences only (DESIGN.md §3).
+//! differences between structures are traversal differences only (docs/design.md §3).
 //!
 //! The ray is sheared and scaled once so it runs along +Z from the origin; each triangle is then
 //! tested with 2D edge functions. An edge shared by two triangles yields the same edge-function

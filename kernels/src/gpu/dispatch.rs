@@ -1,4 +1,4 @@
-//! Runs a [`GpuProgram`] over a ray buffer (DESIGN.md §5 "GPU"):
+//! Runs a [`GpuProgram`] over a ray buffer (docs/design.md §5 "GPU"):
 //!
 //! 1. **compile** the assembled module into the main pipeline (and the pre-pass's), with the
 //!    `COUNT_STEPS` override off; a second pair with it on only when steps are asked for;
@@ -30,7 +30,7 @@ const HIT_BYTES: u64 = 16;
 pub struct DispatchOptions {
     /// Untimed submissions before the timed ones.
     pub warmup: u32,
-    /// Timed submissions (DESIGN.md §7: at least 5 for results that count).
+    /// Timed submissions (docs/design.md §7: at least 5 for results that count).
     pub reps: u32,
     /// Also run once with `COUNT_STEPS` on (untimed) and return its per-ray steps.
     pub count_steps: bool,

@@ -1,6 +1,6 @@
 // GPU kernel of the grid family (UG, RG, RG-2, ORG), the WGSL twin of kernels/src/cpu/grid.rs: a
 // hierarchical 3D-DDA (Amanatides & Woo 1987) per level, descending into a sub-grid with the ray
-// clipped to the parent cell's span (DESIGN.md §4.5, seed 002). The CPU kernel's notes on exact
+// clipped to the parent cell's span (docs/design.md §4.5, seed 002). The CPU kernel's notes on exact
 // cell spans, start cells and robustness hold here as there: every boundary t is computed afresh
 // from `grid_boundary` (GridHeader::boundary's arithmetic), never accumulated.
 //

@@ -1,4 +1,4 @@
-//! The GPU backend (DESIGN.md §5): WGSL compute kernels run through wgpu over the very `u32` words
+//! The GPU backend (docs/design.md §5): WGSL compute kernels run through wgpu over the very `u32` words
 //! each structure stores.
 //!
 //! - [`GpuContext`]: the adapter and device, chosen once per process ([`GpuContext::shared`]).
@@ -70,7 +70,7 @@ pub enum GpuError {
     Device { label: String, what: &'static str, detail: String },
 }
 
-/// What results record about the adapter (DESIGN.md §8: the GPU rows name adapter and driver).
+/// What results record about the adapter (docs/design.md §8: the GPU rows name adapter and driver).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GpuAdapterInfo {
     pub name: String,

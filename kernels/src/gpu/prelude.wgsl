@@ -52,7 +52,7 @@ struct Frame {
 override COUNT_STEPS: bool = false;
 var<private> steps: u32;
 
-// Kernels call this once per iteration of their traversal loop (DESIGN.md §3 "steps").
+// Kernels call this once per iteration of their traversal loop (docs/design.md §3 "steps").
 fn count_step() {
     if (COUNT_STEPS) {
         steps += 1u;

@@ -4,7 +4,7 @@
 //!
 //! A buffer larger than the device's storage-binding limit is split into chunks, each its own
 //! binding; its accessor `fn <name>(i: u32) -> u32` branches on the chunk, so a kernel reads word
-//! `i` of its buffer the same way whatever the split (DESIGN.md §5 "split across bindings").
+//! `i` of its buffer the same way whatever the split (docs/design.md §5 "split across bindings").
 
 use std::borrow::Cow;
 use std::fmt::Write;

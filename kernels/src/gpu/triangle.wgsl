@@ -1,6 +1,6 @@
 // The watertight ray/triangle test of Woop, Benthin & Wald, "Watertight Ray/Triangle
 // Intersection", JCGT 2(1), 2013 — the WGSL twin of kernels/src/cpu/triangle.rs, same arithmetic
-// in the same order, so CPU and GPU hits agree (DESIGN.md §3).
+// in the same order, so CPU and GPU hits agree (docs/design.md §3).
 //
 // Reads the triangle soup through the accessor `triangles(i)`: 9 words per triangle, the three
 // vertices' x, y, z as f32 bits (structures' `Arc<[Triangle]>`, uploaded as it is).

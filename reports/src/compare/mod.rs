@@ -1,4 +1,4 @@
-//! `harness compare NEW BASE` (DESIGN.md §7–8): per (scene, structure, backend, workload) the
+//! `harness compare NEW BASE` (docs/design.md §7–8): per (scene, structure, backend, workload) the
 //! change in every metric, judged against a per-metric threshold.
 //!
 //! Two kinds of metric, judged differently:
@@ -38,7 +38,7 @@ mod thresholds;
 use thresholds::{Kind, METRICS};
 pub use thresholds::{ThresholdError, Thresholds};
 
-/// The structure timings are divided by (DESIGN.md §4.5: the reference BVH).
+/// The structure timings are divided by (docs/design.md §4.5: the reference BVH).
 pub const REFERENCE: &str = "bvh";
 
 /// What a row's comparison found.

@@ -1,4 +1,4 @@
-//! `report.html` (DESIGN.md §8): one self-contained page a person can read without the JSON —
+//! `report.html` (docs/design.md §8): one self-contained page a person can read without the JSON —
 //! inline CSS, charts as inline SVG (plotters), images as PNG data URIs, no scripts and no
 //! external reference of any kind. Sections: the run (machine, git, settings), an at-a-glance
 //! matrix, the paper reproductions, the scaling studies, then per scene a summary table, memory,

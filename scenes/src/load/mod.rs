@@ -1,7 +1,7 @@
 //! Scene files: OBJ (plain or gzipped, through `tobj`), glTF/GLB (through `gltf`), PLY (plain or
 //! gzipped, through `ply-rs-bw`) and STL (ASCII through `stl_io`, binary records read here).
 //!
-//! Contract (DESIGN.md §3): bad input gets an error naming the file and the line (OBJ) or element
+//! Contract (docs/design.md §3): bad input gets an error naming the file and the line (OBJ) or element
 //! (glTF) — malformed or truncated files, NaN/inf coordinates, out-of-range indices, empty meshes.
 //! Degenerate triangles are kept here (a scene drops them: [`crate::load_scene`]).
 //!

@@ -1,4 +1,4 @@
-//! "City": a grid of box buildings on a ground plane (DESIGN.md §6).
+//! "City": a grid of box buildings on a ground plane (docs/design.md §6).
 //!
 //! Architectural scenes are mostly large axis-aligned faces and empty streets: few triangles per
 //! building, a skyline of very different heights (a tall downtown, low suburbs), and one ground

@@ -1,4 +1,4 @@
-//! "Fire (animated)": thousands of small tumbling particles rising over a hearth (DESIGN.md §6).
+//! "Fire (animated)": thousands of small tumbling particles rising over a hearth (docs/design.md §6).
 //!
 //! After BART's Fire (Lext, Assarsson and Möller, "A Benchmark for Animated Ray Tracing",
 //! IEEE CG&A 2001): many tiny unconnected objects moving independently and at random, with

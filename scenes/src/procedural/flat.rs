@@ -1,4 +1,4 @@
-//! "Flat": random triangles lying in the plane y = 0 (DESIGN.md §6).
+//! "Flat": random triangles lying in the plane y = 0 (docs/design.md §6).
 //!
 //! Its bounding box has exactly one zero-length side, the case ORG's Algorithm 1 handles apart
 //! (seed 002: a zero side gets resolution 1, and Eq. 1's volume `V` would be 0). The canonical

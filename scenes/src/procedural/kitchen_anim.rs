@@ -1,4 +1,4 @@
-//! "Kitchen (animated)": a furnished kitchen in which a few things move (DESIGN.md §6).
+//! "Kitchen (animated)": a furnished kitchen in which a few things move (docs/design.md §6).
 //!
 //! After BART's Kitchen (Lext, Assarsson and Möller, "A Benchmark for Animated Ray Tracing",
 //! IEEE CG&A 2001): a room that is almost all static furniture and clutter, with a few small rigid

@@ -1,7 +1,7 @@
 //! "Menger": the Menger sponge as a closed surface mesh (seed 004's fractal test scenes).
 //!
 //! Self-similar repetition at every scale is what SVDAG's merging of identical subtrees feeds on
-//! (DESIGN.md §4.4), and the sponge's tunnels give rays long paths through empty space next to
+//! (docs/design.md §4.4), and the sponge's tunnels give rays long paths through empty space next to
 //! solid walls. The level-`L` sponge is the set of unit cells of a 3^L grid that have, at no base-3
 //! digit position, two or more coordinates whose digit is 1 (20^L cubes). Only the cube faces that
 //! separate a solid cell from an empty cell or the outside are emitted, on vertices shared through

@@ -1,4 +1,4 @@
-//! Deterministic procedural scenes of DESIGN.md §6, one file per scene.
+//! Deterministic procedural scenes of docs/design.md §6, one file per scene.
 //!
 //! Every scene is a pure function of its arguments: the same seed gives the same mesh bit for bit
 //! (one PCG stream per scene, consumed in a fixed order; no hash-map iteration; parallel work only
@@ -81,7 +81,7 @@ pub fn flat(seed: u64) -> Scene {
 }
 
 /// A closed room with closed two-manifold objects, a point light and a camera inside: the shadow
-/// SVDAG workload (DESIGN.md §4.4).
+/// SVDAG workload (docs/design.md §4.4).
 pub fn room(seed: u64) -> Scene {
     room::generate(seed)
 }

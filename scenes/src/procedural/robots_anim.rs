@@ -1,4 +1,4 @@
-//! "Robots (animated)": many articulated figures walking in an arena (DESIGN.md §6).
+//! "Robots (animated)": many articulated figures walking in an arena (docs/design.md §6).
 //!
 //! After BART's Robots (Lext, Assarsson and Möller, "A Benchmark for Animated Ray Tracing",
 //! IEEE CG&A 2001): a crowd of rigid-part robots walking through a static set, so nearly every

@@ -1,6 +1,6 @@
-//! "Room": a closed room with closed objects and a point light (DESIGN.md §6).
+//! "Room": a closed room with closed objects and a point light (docs/design.md §6).
 //!
-//! The shadow workload's scene: shadow SVDAG's double depth maps (DESIGN.md §4.4) need every
+//! The shadow workload's scene: shadow SVDAG's double depth maps (docs/design.md §4.4) need every
 //! occluder to be a closed two-manifold surface, and a closed room keeps every shadow ray inside
 //! geometry. The walls, floor and ceiling are one box wound inwards; inside stand two boxes, a UV
 //! sphere, a cylinder and a torus, each its own closed object with shared vertices, their sizes

@@ -4,7 +4,7 @@
 //! Every closed shape shares its vertices between triangles and winds its triangles
 //! counter-clockwise seen from outside (`(b - a) × (c - a)` points out), so each undirected edge is
 //! used by exactly two triangles, once in each direction — the two-manifold surfaces shadow SVDAG's
-//! double depth maps rely on (DESIGN.md §4.4).
+//! double depth maps rely on (docs/design.md §4.4).
 
 use glam::{Mat4, UVec3, Vec2, Vec3};
 
@@ -167,7 +167,7 @@ pub(super) fn cylinder_profile(radius: f32, height: f32) -> Vec<Vec2> {
 /// [`push_lathe`] needs (as [`sphere_profile`] does, top pole to bottom pole): from the pole on the
 /// inner floor, up the inner wall (the outline moved `wall` inwards, reversed), across the rim, down
 /// the outer wall to the pole under the foot. So the vessel is one closed two-manifold with real
-/// wall thickness, not an open band that would break shadow SVDAG's depth maps (DESIGN.md §4.4).
+/// wall thickness, not an open band that would break shadow SVDAG's depth maps (docs/design.md §4.4).
 pub(super) fn vessel_profile(outline: &[Vec2], wall: f32) -> Vec<Vec2> {
     let foot = outline.last().copied().unwrap_or(Vec2::ZERO);
     let floor = foot.y + wall;

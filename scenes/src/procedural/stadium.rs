@@ -1,4 +1,4 @@
-//! "Teapot in a stadium": a tiny dense object in a huge sparse scene (DESIGN.md §6).
+//! "Teapot in a stadium": a tiny dense object in a huge sparse scene (docs/design.md §6).
 //!
 //! The classic failure case of uniform grids (Eq. 1 spreads ≈ λN cells over the whole stadium, so
 //! the teapot, about 1/200 of the stadium across, falls into one or two cells holding all its

@@ -1,4 +1,4 @@
-//! "Terrain": a height field of hills and valleys (DESIGN.md §6).
+//! "Terrain": a height field of hills and valleys (docs/design.md §6).
 //!
 //! A regular grid of [`CELLS`]² quads over `[-1, 1]²` in x/z whose heights are fractal value noise
 //! (fBm): a surface that is locally smooth and well spread over two axes but thin on the third —

@@ -1,5 +1,5 @@
 //! The reference BVH: the structure a user would pick instead of a grid or an octree, and the
-//! correctness oracle for every triangle structure (DESIGN.md §4.5, last item).
+//! correctness oracle for every triangle structure (docs/design.md §4.5, last item).
 //!
 //! The tree is built by a well-kept crate, `obvhs` (PLOC with parallel reinsertion and SAH leaf
 //! collapse), then flattened into our own 32-byte node layout ([`layout::BvhNode`]) plus one `u32`

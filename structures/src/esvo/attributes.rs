@@ -1,5 +1,5 @@
 //! ESVO shading attributes: pure encode/decode functions for colour and normal (seed 000 §5.4–5.5,
-//! DESIGN.md §4.3 "Attachments").
+//! docs/design.md §4.3 "Attachments").
 //!
 //! - **Uncompressed** (§5.4, Fig. 7a/7b): 64 bits per voxel, a 32-bit ABGR colour
 //!   ([`encode_abgr`]) and a 32-bit normal stored as a point on the unit cube ([`encode_normal`]).

@@ -1,5 +1,5 @@
 //! Builds ESVO's layout ([`super::layout`]) straight from the voxeliser's stream, sub-cube by
-//! sub-cube (seed 000 §5.1 blocks, §7 bounded memory; DESIGN.md §4.3):
+//! sub-cube (seed 000 §5.1 blocks, §7 bounded memory; docs/design.md §4.3):
 //!
 //! 1. each sub-cube the voxeliser streams (a voxel `B` at the sub-cube level `s`, 2^7 voxels wide)
 //!    becomes an octree of its own ([`OctreeBuilder::subtree`]); batches of them get their

@@ -1,5 +1,5 @@
 //! ESVO contours — a pair of parallel planes bounding the surface inside a voxel
-//! (seed 000 §5.2, Fig. 4; cooperating contours §5.3; DESIGN.md §4.3).
+//! (seed 000 §5.2, Fig. 4; cooperating contours §5.3; docs/design.md §4.3).
 //!
 //! A contour is one 32-bit word:
 //!
@@ -154,7 +154,7 @@ impl Contour {
 /// Parameters of [`fit`].
 #[derive(Clone, Debug)]
 pub struct FitParams {
-    /// Store a contour only where it tightens the bound meaningfully (DESIGN.md §4.3): only if
+    /// Store a contour only where it tightens the bound meaningfully (docs/design.md §4.3): only if
     /// the slab keeps at most this fraction of the cube's extent along its normal. Default 0.5.
     pub max_ratio: f32,
     /// Extra candidate directions (any length, need not be unit; zero ones are ignored), e.g.

@@ -1,4 +1,4 @@
-//! ESVO — Laine & Karras, *Efficient Sparse Voxel Octrees* (seed 000 §5–6; DESIGN.md §4.3).
+//! ESVO — Laine & Karras, *Efficient Sparse Voxel Octrees* (seed 000 §5–6; docs/design.md §4.3).
 //!
 //! | file | what |
 //! |---|---|

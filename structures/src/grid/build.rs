@@ -30,7 +30,7 @@ pub const MAX_REFS: u64 = 1 << 26;
 
 impl GridKind {
     /// The kind called `name` (`ug`, `rg`, `rg2`, `org`) with its parameters read from
-    /// `params` as `<name>.<param>` (e.g. `org.lambda=2`), defaulting as DESIGN.md §4.5 says.
+    /// `params` as `<name>.<param>` (e.g. `org.lambda=2`), defaulting as docs/design.md §4.5 says.
     pub fn from_params(name: &str, params: &crate::Params) -> Result<Self, BuildError> {
         let key = |k: &str| format!("{name}.{k}");
         let kind = match name {

@@ -15,7 +15,7 @@
 //!   the exact-span argument of the kernels holds across both levels.
 //!
 //! Keeping sub-grid links in `refs` keeps `cells` a pure prefix sum: one count pass, one
-//! prefix sum and one fill pass build any level (seed 002 §1, DESIGN.md §4.5).
+//! prefix sum and one fill pass build any level (seed 002 §1, docs/design.md §4.5).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3};

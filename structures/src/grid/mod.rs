@@ -33,7 +33,7 @@ use crate::{MemoryReport, Structure};
 pub use build::{MAX_DEPTH, MAX_REFS, build};
 pub use layout::{BRICK_SHIFT, GridHeader, SUBGRID_BIT};
 
-/// Which member of the family, and its parameters (defaults: seed 002 §3 and DESIGN.md §4.5).
+/// Which member of the family, and its parameters (defaults: seed 002 §3 and docs/design.md §4.5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum GridKind {
@@ -75,7 +75,7 @@ pub enum CellTest {
 /// Where ORG's pointer ratio β (seed 002 §2) comes from. The paper gives two: its derivation
 /// reduces level k+1 by the ratio level k produced ("G_1 holds βN pointers … level 2's λβN cells
 /// become λN"), and its definition is a per-cell ratio "pointers in the cell's sub-grid over the
-/// pointers in the cell" (stated inverted; DESIGN.md §4.5), which needs the sub-grid before its
+/// pointers in the cell" (stated inverted; docs/design.md §4.5), which needs the sub-grid before its
 /// resolution is known.
 ///
 /// **The default is [`BetaRule::Level`] with [`GammaTest::Reduced`]**, because it reproduces the
@@ -117,7 +117,7 @@ impl GridKind {
         }
     }
 
-    /// ORG with the paper's defaults (λ = 1, α = 2, γ = 16, MAXDEPTH = 8; DESIGN.md §4.5) and the
+    /// ORG with the paper's defaults (λ = 1, α = 2, γ = 16, MAXDEPTH = 8; docs/design.md §4.5) and the
     /// readings `org` builds by default.
     pub const ORG_PAPER: GridKind = GridKind::Org {
         lambda: 1.0,

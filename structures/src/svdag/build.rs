@@ -1,4 +1,4 @@
-//! SVDAG builds (seed 001 §2.2, §5.1; DESIGN.md §4.4 "Large resolutions"):
+//! SVDAG builds (seed 001 §2.2, §5.1; docs/design.md §4.4 "Large resolutions"):
 //!
 //! - **stream** (default): straight from the voxeliser, never holding the SVO. Each sub-cube the
 //!   voxeliser streams (2^7 voxels wide) is reduced to a sub-DAG of its own ([`Stream`] into a

@@ -1,5 +1,5 @@
 //! SVDAG — the sparse voxel directed acyclic graph (seed 001 §2; Kämpe, Sintorn & Assarsson,
-//! "High Resolution Sparse Voxel DAGs", SIGGRAPH 2013; DESIGN.md §4.4): the sparse voxel octree
+//! "High Resolution Sparse Voxel DAGs", SIGGRAPH 2013; docs/design.md §4.4): the sparse voxel octree
 //! with identical subtrees stored once, found bottom-up level by level.
 //!
 //! | file | what |

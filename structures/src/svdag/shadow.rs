@@ -1,4 +1,4 @@
-//! The shadow SVDAG with double depth maps (seed 001 §3; DESIGN.md §4.4): the light's view of the
+//! The shadow SVDAG with double depth maps (seed 001 §3; docs/design.md §4.4): the light's view of the
 //! scene voxelised into lit, shadow and boundary, stored as a DAG of 2-bit-per-child nodes, so
 //! that "is this point lit?" is a descent to the first uniform node.
 //!

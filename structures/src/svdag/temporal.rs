@@ -1,4 +1,4 @@
-//! The temporal SVDAG (seed 001 §4; DESIGN.md §4.4): every frame of an animation merged into one
+//! The temporal SVDAG (seed 001 §4; docs/design.md §4.4): every frame of an animation merged into one
 //! DAG, bottom-up level by level, with one root per frame kept unmerged in time order ("即使当序列
 //! 中的两个 SVO 完全相同时,仍然保留根节点不被合并,以用来代表不同的帧时刻"). A frame's root is
 //! an ordinary SVDAG root: the same CPU and WGSL casters render it ([`Frame`]; the root is a

@@ -1,7 +1,7 @@
 //! `svo` — the plain sparse voxel octree of seed 001 §2.1: per interior voxel an 8-bit child mask
 //! and one pointer to its first child; children are stored consecutively, breadth-first with
 //! Morton order inside a level, so no other pointer is needed. It is the node/pointer-count
-//! baseline of the SVDAG tables (DESIGN.md §4.2). Traversal: `kernels::cpu::svo`.
+//! baseline of the SVDAG tables (docs/design.md §4.2). Traversal: `kernels::cpu::svo`.
 
 use serde_json::json;
 

@@ -1,4 +1,4 @@
-//! Conservative surface voxelisation, the input of every voxel structure (DESIGN.md §4.1).
+//! Conservative surface voxelisation, the input of every voxel structure (docs/design.md §4.1).
 //!
 //! A scene is voxelised into a `2^L` grid over its bounding cube ([`VoxelGrid`]). Voxels are
 //! named by their Morton code ([`morton`]): three bits per level, x in the lowest bit of each
@@ -219,7 +219,7 @@ pub fn estimate_surface_voxels(scene: &scenes::Scene, triangles: &[scenes::Trian
 }
 
 /// Voxelises `scene` at `level` into an [`Octree`], streaming the voxeliser's chunks straight into
-/// the octree builder (DESIGN.md §4.1: bounded memory at high levels).
+/// the octree builder (docs/design.md §4.1: bounded memory at high levels).
 pub fn build_octree(scene: &scenes::Scene, level: u32) -> (Octree, VoxelizeStats) {
     let grid = VoxelGrid::fit(scene.bounds(), level);
     let mut builder = OctreeBuilder::new(grid);

@@ -393,7 +393,7 @@ fn time_dragon(level: u32) {
     );
 }
 
-/// The speed target of DESIGN.md §4.1: `cargo test -p structures voxel_dragon -- --ignored --nocapture`.
+/// The speed target of docs/design.md §4.1: `cargo test -p structures voxel_dragon -- --ignored --nocapture`.
 #[test]
 #[ignore = "timing: loads the 871K-triangle dragon"]
 fn voxel_dragon_level_11_timing() {

@@ -1,4 +1,4 @@
-//! Conservative surface voxelisation, streamed by sub-cube in Morton order (DESIGN.md §4.1).
+//! Conservative surface voxelisation, streamed by sub-cube in Morton order (docs/design.md §4.1).
 //!
 //! Phases, in order:
 //! 1. **bin** — count, prefix sum, fill: every triangle is listed under each sub-cube (a cube of

@@ -3,7 +3,7 @@
 //! slabs, basins, trays, hoods), tori, leaves, and the profiles of its turned and thrown things.
 //!
 //! Every part is closed and wound outwards like the shapes it is built from, so an object made of
-//! parts is a union of closed two-manifolds (DESIGN.md §4.4). Parts may overlap: the voxels take
+//! parts is a union of closed two-manifolds (docs/design.md §4.4). Parts may overlap: the voxels take
 //! their union.
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, SQRT_2, TAU};
