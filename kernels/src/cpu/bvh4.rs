@@ -1,8 +1,8 @@
 //! CPU kernel of the wide BVH (`structures::bvh4`, issue 30): ordered depth-first traversal
 //! testing a node's 4 or 8 child boxes, and a leaf block's four triangles, at once.
 //!
-//! One traversal ([`walk`]), generic over the node width, over two implementations of the same
-//! two tests (the box test [`BoxLanes`] and the shared four-lane triangle test [`TriangleLanes`]):
+//! One traversal (`walk`), generic over the node width, over two implementations of the same
+//! two tests (the box test `BoxLanes` and the shared four-lane triangle test `TriangleLanes`):
 //! - SIMD: the boxes of a 4-wide node in 4 SSE lanes, those of an 8-wide node in 8 AVX lanes,
 //!   triangles in 4 SSE lanes; the arithmetic of the scalar tests lane by lane in the same order
 //!   ([`super::lanes`]), so its answers are theirs bit for bit;

@@ -5,7 +5,7 @@
 //! before the nearest hit so far (the stack's top is the nearest: the walk ends soon after a hit).
 //!
 //! Exactness: the hit equals brute force's on the shared watertight test. The plane distances are
-//! rounded, so each interval end is widened by [`MARGIN`] (a plane within rounding of an end opens
+//! rounded, so each interval end is widened by `MARGIN` (a plane within rounding of an end opens
 //! both children); a ray lying in a split plane walks both sides; a triangle is listed in every
 //! leaf its clipped box meets, so the nearest hit's point is in a visited leaf.
 //!

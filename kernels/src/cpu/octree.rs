@@ -8,7 +8,7 @@
 //! Where this departs from the paper, for exactness: each plane's `t` is computed from the plane
 //! itself (`(p − o)/d`, relative error of an ulp or two), not as the mean of the faces' `t`; and
 //! instead of the paper's table of successor nodes every non-empty child is given its own
-//! interval, widened by [`MARGIN`], so a child the ray meets within rounding of an edge or corner
+//! interval, widened by `MARGIN`, so a child the ray meets within rounding of an edge or corner
 //! is visited too. Empty children are never visited (the child mask says which exist). The
 //! nearest hit's point lies in a cell the ray enters before the hit, and its triangle is listed
 //! there; so the hit equals brute force's on the shared watertight test. A ray parallel to a

@@ -10,12 +10,12 @@
 //!   so the CPU and GPU kernels trace bit-identical rays.
 //! - [`render`]: all of it for one structure and camera, as a [`crate::cpu::render::Frame`].
 //!
-//! WGSL kernels sit here beside their Rust binding, one per structure: `bvh.wgsl` ([`bvh`]) and
-//! `grid.wgsl` ([`grid`], shared by UG, RG, RG-2 and ORG), both over the shared watertight triangle
+//! WGSL kernels sit here beside their Rust binding, one per structure: `bvh.wgsl` (`bvh`) and
+//! `grid.wgsl` (`grid`, shared by UG, RG, RG-2 and ORG), both over the shared watertight triangle
 //! test `triangle.wgsl` and slab test `slab.wgsl`; `svo_naive.wgsl`, `svo.wgsl` and `esvo.wgsl`
-//! ([`voxel`]), over the mirrored-frame set-up `octree_ray.wgsl` and, for the last two, the shared
+//! (`voxel`), over the mirrored-frame set-up `octree_ray.wgsl` and, for the last two, the shared
 //! Laine–Karras caster `octree_cast.wgsl` (the WGSL twin of `cpu::octree_cast`); `cwbvh.wgsl`
-//! ([`cwbvh`]), Ylitie et al.'s compressed-wide-BVH traversal over the obvhs crate's own node words
+//! (`cwbvh`), Ylitie et al.'s compressed-wide-BVH traversal over the obvhs crate's own node words
 //! with the crate's Möller–Trumbore test (the GPU row of the `cwbvh` reference). Voxel kernels
 //! return the hit's `t` and Morton code; like the triangle kernels they read no shading attributes.
 

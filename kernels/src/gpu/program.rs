@@ -22,7 +22,7 @@ pub struct GpuProgram<'a> {
     pub wgsl: &'static str,
     /// Read-only u32 storage buffers in order. WGSL reads each through a generated accessor
     /// `fn <name>(i: u32) -> u32` (so a buffer larger than the binding limit can be split across
-    /// several bindings transparently: the accessor branches on the chunk). Floats via bitcast<f32>.
+    /// several bindings transparently: the accessor branches on the chunk). Floats via `bitcast<f32>`.
     pub buffers: Vec<GpuBuffer<'a>>,
     /// Optional pre-pass dispatched before the main pass in the same submission (ESVO's beam).
     pub prepass: Option<PrePass>,

@@ -14,8 +14,8 @@
 //! indexes the POSITION accessor unchecked, its accessor reader asserts element sizes (a
 //! `byteStride` smaller than the element panics), hits `unreachable!` on index or colour types
 //! the spec forbids, and underflows on `count: 0`. So we check those first: the POSITION
-//! accessor index before validation ([`open`]), and every accessor's type, stride and byte
-//! range against its buffer before reading it ([`check_accessor`]). Buffers are resolved here,
+//! accessor index before validation (`open`), and every accessor's type, stride and byte
+//! range against its buffer before reading it (`check_accessor`). Buffers are resolved here,
 //! not with `gltf::import`, which unwraps the percent-decoding of external URIs; that also
 //! keeps the exact byte count of a data URI, so a short one is reported as Truncated.
 //! Sparse accessors are rejected as Unsupported; a node reached twice (a cycle, or two
@@ -25,7 +25,7 @@
 //! positions of 8- or 16-bit integers, normalized or not, and normalized integer normals, scaled
 //! back by the node transforms as the extension specifies; meshopt-compressed buffer views
 //! (`EXT_meshopt_compression`, `KHR_meshopt_compression`: `gltfpack -c`) are decoded
-//! ([`super::meshopt`]). Draco compression is refused by name, with what to do instead; so is
+//! (`super::meshopt`). Draco compression is refused by name, with what to do instead; so is
 //! glTF 1.0, by its version.
 
 use std::collections::BTreeMap;

@@ -3,7 +3,7 @@
 //! The happy path is tobj plus one quick keyword pass (see "Faces and lines"): the dragon (871K
 //! triangles) is loaded on every run. tobj's errors carry no line numbers, so only when
 //! something is wrong (tobj fails, a coordinate is NaN or infinite, a face has fewer than three
-//! vertices, or there are no faces) do we rescan the text with [`find_problem`] to blame the
+//! vertices, or there are no faces) do we rescan the text with `find_problem` to blame the
 //! first bad line.
 //!
 //! Rules this loader follows:

@@ -79,12 +79,12 @@ impl std::str::FromStr for BvhPreset {
 ///   breaks ties in cost towards the right: among clusters with bit-for-bit equal boxes
 ///   (coincident or duplicated triangles) only the last pair agrees, so each pass merges one pair
 ///   and the tree becomes a chain, built in quadratic time. Triangles sharing a box with more
-///   than a leaf's worth of others are therefore grouped first ([`CoincidentGroups`]): obvhs
+///   than a leaf's worth of others are therefore grouped first (`CoincidentGroups`): obvhs
 ///   builds over one triangle per group, and a leaf whose groups hold more triangles than a leaf
-///   takes is split by count ([`Halving::split`]), the only split equal boxes allow. A soup without
+///   takes is split by count (`Halving::split`), the only split equal boxes allow. A soup without
 ///   such boxes (every built-in scene) is built exactly as obvhs builds it.
 /// - Should obvhs still return a tree deeper than [`MAX_DEPTH`], it is replaced by a
-///   median-split tree ([`median_tree`]), at most ⌈log₂ N⌉ + 1 deep by construction.
+///   median-split tree (`median_tree`), at most ⌈log₂ N⌉ + 1 deep by construction.
 pub fn build(input: &BuildInput) -> Result<Bvh, BuildError> {
     let preset = BvhPreset::from_params(input.params)?;
     let triangles = &input.triangles;

@@ -5,7 +5,7 @@
 //! Each wide node takes its BVH2 node's two children and keeps opening the inner child of largest
 //! surface area until it has `W` (the greedy collapse of Wald, Benthin & Boulos 2008 and of
 //! Embree's `BVHNBuilder`); a BVH2 leaf becomes a wide leaf of ⌈count / 4⌉ blocks, or, with
-//! `bvh4.leaves=sah`, a small subtree becomes one leaf where the SAH says so ([`sah_leaves`]).
+//! `bvh4.leaves=sah`, a small subtree becomes one leaf where the SAH says so (`sah_leaves`).
 
 use super::layout::{MAX_BLOCKS, MAX_LEAF_BLOCKS, Tri4, WIDTH, WideNode, leaf};
 use super::{WIDTH_KEY, WideBvh, Width};
@@ -46,7 +46,7 @@ pub enum Leaves {
     /// time): the wide tree differs from the reference in node width alone.
     Bvh2,
     /// Subtrees merged into one leaf wherever the surface area heuristic, costing a leaf by its
-    /// 4-triangle blocks, says that is cheaper ([`sah_leaves`]).
+    /// 4-triangle blocks, says that is cheaper (`sah_leaves`).
     Sah,
 }
 

@@ -9,7 +9,7 @@
 //! The declarations below transcribe Embree 3.13's headers (`rtcore_*.h`). The layouts that matter
 //! are `RTCRayHit` and `RTCRayHitN`, and `RTCIntersectContext`; they are fixed across Embree 3
 //! for the library's default configuration, `RTC_MAX_INSTANCE_LEVEL_COUNT = 1` (the Debian package
-//! and Intel's binaries). [`Api::load`] refuses any major version but 3. A library built with more
+//! and Intel's binaries). `Api::load` refuses any major version but 3. A library built with more
 //! instance levels writes a longer `instID` array at the end of the hit: the structures below
 //! carry spare words after it, so such a write stays inside our memory.
 

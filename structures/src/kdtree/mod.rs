@@ -1,5 +1,5 @@
 //! `kdtree`: the surface-area-heuristic kd-tree seed 002 measures ORG against (issue 29; Wald &
-//! Havran, IEEE RT 2006), built in O(N log N) by the event sweep ([`build`]), with "perfect
+//! Havran, IEEE RT 2006), built in O(N log N) by the event sweep (`build`), with "perfect
 //! splits" (triangles clipped to the cells, [`clip`]) as a parameter, stored in Wald's 8-byte
 //! nodes ([`layout::KdNode`]) over one reference list. CPU kernel: `kernels::cpu::kdtree`.
 //!

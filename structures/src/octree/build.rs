@@ -23,8 +23,8 @@ const PARALLEL_TRIANGLES: usize = 4096;
 /// listed, so a triangle touching a cell within the separating-axis test's f64 rounding is kept.
 pub(super) const SLACK_LOG2: i32 = 20;
 
-/// The most references per triangle the build lays out (at least [`MIN_REF_LIMIT`] in all, at
-/// most [`MAX_REFS`]): a level that would pass it is not made, its nodes stay leaves (as ORG's
+/// The most references per triangle the build lays out (at least `MIN_REF_LIMIT` in all, at
+/// most `MAX_REFS`): a level that would pass it is not made, its nodes stay leaves (as ORG's
 /// reference budget stops its refinement). Exact lists stay far below it (6–17 per triangle over
 /// the built-in scenes at `leaf_size` 8, 39–118 at 1); bounding-box lists of long thin triangles
 /// would pass it by orders of magnitude (80,000 per blade on `grass-10k`), as would any cells of

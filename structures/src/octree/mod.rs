@@ -3,7 +3,7 @@
 //! `leaf_size` triangles is split into eight equal children, down to `max_depth`; a triangle is
 //! listed in every leaf it overlaps, by bounding box or by the exact separating-axis test
 //! (`cell_test`, as ORG's). Records are laid out breadth first with child and leaf masks, as the
-//! voxel octrees ([`layout`]). Builder: [`build`]; CPU kernel: `kernels::cpu::octree` (the
+//! voxel octrees ([`layout`]). Builder: `build`; CPU kernel: `kernels::cpu::octree` (the
 //! parametric traversal of Revelles, Ureña & Lastra 2000); WGSL: `kernels/src/gpu/octree.wgsl`.
 //!
 //! Every cell plane is exact in f32: the root cube's side is a power of two and its corner lies on

@@ -11,7 +11,7 @@
 //!   conversion; its `reduce_ms` is the SVO → SVDAG time of seed 001 Table 3.
 //!
 //! Both give the same words, bit for bit (`tests::stream_and_octree_builds_are_identical`).
-//! Then [`lay_out`] concatenates the levels from the root down and rebases every pointer.
+//! Then `lay_out` concatenates the levels from the root down and rebases every pointer.
 
 use std::collections::VecDeque;
 use std::time::Instant;

@@ -32,7 +32,7 @@
 //! holds voxels' codes only (one word). Child slot bits: u in bit 0, v in bit 1, depth in bit 2.
 //! Identical nodes are merged level by level, bottom-up (step 7, [`super::reduce`]).
 //!
-//! A query ([`ShadowDag::lit`]) projects the point, then descends until a uniform child.
+//! A query (`ShadowDag::lit`) projects the point, then descends until a uniform child.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -267,7 +267,7 @@ fn objects(scene: &Scene) -> (Vec<u32>, Vec<bool>) {
 
 /// Rasterises every triangle of `scene` into the double depth map of `space`.
 ///
-/// Binned by bands of whole rows: each triangle is clipped and snapped once ([`Setup`]) and
+/// Binned by bands of whole rows: each triangle is clipped and snapped once (`Setup`) and
 /// listed under every band its box meets; the bands, each owning its texels, run both passes in
 /// parallel with plain minima. A fragment's depth comes from the same integer edge functions as
 /// in a per-triangle rasteriser, and minima ignore order, so the maps do not depend on the bands.

@@ -26,7 +26,7 @@
 //!
 //! Per frame the build reports, from the finished words alone: its SVO node count, its own
 //! SVDAG's node count (the nodes reachable from its root: the minimal DAG below a root is unique),
-//! the nodes it added, and the nodes a difference tree (seed 001 ref. [18]) stores for it: every
+//! the nodes it added, and the nodes a difference tree (seed 001, ref. 18) stores for it: every
 //! SVO node whose subtree differs from the same position in the previous frame.
 
 use std::time::Instant;

@@ -3,7 +3,7 @@
 //! wide-tree builds ([`crate::voxel::wide`]), which meet every level's nodes in the same order,
 //! so both give the same words. Each node's children become one child list appended to the
 //! store of the level below — or, with `tree64.dag=on`, looked up there first and stored only if
-//! new (hash-consing, [`crate::intern`]); then [`lay_out`] concatenates the levels root first and
+//! new (hash-consing, `crate::intern`); then `lay_out` concatenates the levels root first and
 //! rebases each descriptor's offset.
 
 use std::time::Instant;

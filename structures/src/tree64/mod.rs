@@ -2,7 +2,7 @@
 //! 2024, the `tree64` crate): a tree of 4×4×4-way nodes with 64-bit child masks and packed child
 //! lists, over the conservative voxelisation every voxel structure shares; `tree64.dag=on`
 //! stores equal child lists once, merged bottom-up as `svdag` merges (through the same
-//! hash-consing, [`crate::intern`]).
+//! hash-consing, `crate::intern`).
 //!
 //! | file | what |
 //! |---|---|

@@ -2,7 +2,7 @@
 //! levels, a window of the voxeliser's chunks) or the canonical octree, through the shared
 //! wide-tree builds ([`crate::voxel::wide`]), which meet every level's nodes in the same order,
 //! so both give the same words. Each node is written to its level's array as it closes, its
-//! children named by their index in the level below; [`lay_out`] then concatenates the root table
+//! children named by their index in the level below; `lay_out` then concatenates the root table
 //! and the interior levels and turns every child index into a word offset.
 
 use std::time::Instant;
