@@ -290,6 +290,10 @@ pub struct RunArgs {
     /// org-fig1,esvo-beam.
     #[arg(long, value_delimiter = ',', value_name = "PRESET,...")]
     pub parts: Vec<String>,
+    /// Run only the K-th of N disjoint slices of the case matrix, balanced by estimated cost, e.g.
+    /// --shard 2/3 (a job array's task); `harness merge` joins the N runs into one.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<crate::shard::Shard>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -370,7 +374,8 @@ pub enum TimingGateArg {
 
 #[derive(Args, Debug, Clone)]
 pub struct MergeArgs {
-    /// Run directories (or results.json files) to merge, e.g. one from a GPU box and one from a laptop.
+    /// Run directories (or results.json files) to merge, e.g. one from a GPU box and one from a
+    /// laptop; or every shard of one run (`run --shard K/N`), which are joined into that run.
     #[arg(value_name = "RUN", required = true, num_args = 2..)]
     pub runs: Vec<PathBuf>,
     /// Where to write the merged results.json, report.md, report.html and images/.

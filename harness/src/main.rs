@@ -22,6 +22,7 @@ mod reps;
 mod resume;
 mod run;
 mod shadows;
+mod shard;
 
 use std::process::ExitCode;
 

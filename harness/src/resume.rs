@@ -70,6 +70,7 @@ fn settings_differences(prefix: &str, a: &Settings, b: &Settings, out: &mut Vec<
         adaptive_reps,
         build_profile,
         params,
+        shard,
     } = a;
     differ(&format!("{prefix}preset"), preset, &b.preset, out);
     differ(&format!("{prefix}scenes"), scenes, &b.scenes, out);
@@ -84,6 +85,7 @@ fn settings_differences(prefix: &str, a: &Settings, b: &Settings, out: &mut Vec<
     differ(&format!("{prefix}adaptive reps"), adaptive_reps, &b.adaptive_reps, out);
     differ(&format!("{prefix}build profile"), build_profile, &b.build_profile, out);
     differ(&format!("{prefix}params"), params, &b.params, out);
+    differ(&format!("{prefix}shard"), shard, &b.shard, out);
 }
 
 fn machine_differences(a: &Machine, b: &Machine, out: &mut Vec<String>) {

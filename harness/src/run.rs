@@ -33,6 +33,7 @@ use crate::phases::{self, Phase};
 use crate::reps;
 use crate::resume;
 use crate::shadows;
+use crate::shard;
 
 /// The structure every other one is checked against, and that is checked against brute force.
 const REFERENCE: &str = reports::compare::REFERENCE;
@@ -107,6 +108,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         top.structures = union(parts.iter().flat_map(|p| &p.plan.structures));
         top.params.clear();
     }
+    top.shard = args.shard.map(|s| s.to_string());
     let mut results = Results {
         schema: reports::SCHEMA.into(),
         run_id,
@@ -116,6 +118,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         settings: top,
         cases: Vec::new(),
         merged: Vec::new(),
+        shards: Vec::new(),
         parts: part_records,
         skipped: Vec::new(),
         phases_s: Default::default(),
@@ -160,6 +163,19 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
             ((name.clone(), c.index), case)
         }));
     }
+    // A shard runs its slice of the matrix; the other cases are not its to run or to list.
+    let shard_cases: Option<BTreeSet<CaseKey>> = args.shard.map(|s| {
+        let units: Vec<_> = planned
+            .iter()
+            .map(|((part, _), c)| ((part.clone(), c.scene.clone()), shard::case_cost(&c.scene)))
+            .collect();
+        let of = shard::assign(&units, s.n);
+        planned.iter().zip(of).filter(|(_, of)| *of + 1 == s.k).map(|((key, _), _)| key.clone()).collect()
+    });
+    if let (Some(shard), Some(mine)) = (args.shard, &shard_cases) {
+        planned.retain(|(key, _)| mine.contains(key));
+        eprintln!("accel-bench: shard {shard}: {} of the matrix", n_cases(planned.len()));
+    }
     let cases = planned.len() as u64;
     let mut eta = Eta::new(planned);
     let left = eta.countdown();
@@ -190,6 +206,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
             gpu,
             progress: &progress,
             eta: &mut eta,
+            shard: shard_cases.as_ref(),
         };
         matrix.run()?;
         if many {
@@ -260,6 +277,8 @@ struct Matrix<'a> {
     progress: &'a Progress,
     /// The time left, estimated after each case and shown in the bar.
     eta: &'a mut Eta<CaseKey>,
+    /// The cases of this shard of the matrix (`--shard`); `None`: every case.
+    shard: Option<&'a BTreeSet<CaseKey>>,
 }
 
 /// How far an interrupted run got: the cases it finished, and how often each was started.
@@ -300,6 +319,9 @@ impl Matrix<'_> {
             let mut pending: Vec<&PlannedCase> = Vec::new();
             for c in matrix {
                 let (structure, key) = (c.structure, key(c));
+                if self.shard.is_some_and(|mine| !mine.contains(&key)) {
+                    continue;
+                }
                 if self.progress.done.contains(&key) {
                     self.eta.skipped(&key);
                     bar.inc(1);
@@ -608,6 +630,7 @@ fn settings(plan: &Plan, params: &Params, command: String) -> Settings {
             env!("ACCEL_BENCH_DEBUG_ASSERTIONS")
         ),
         params: params.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        shard: None,
     }
 }
 

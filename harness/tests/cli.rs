@@ -346,6 +346,64 @@ fn merge_tags_each_machines_cases() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--tag"));
 }
 
+/// A matrix run as three shards (`--shard K/3`, each its own run, as a job array's tasks would)
+/// joins with `harness merge` into the very cases one run of the whole matrix writes: the same
+/// cases in the same order, with the same deterministic figures. The shards are disjoint and none
+/// is empty; a missing or repeated shard is refused, naming it.
+#[test]
+fn three_shards_merge_into_the_run_of_the_whole_matrix() {
+    let dir = temp_dir("shards");
+    let matrix = ["run", "--scenes", "teapot,bunny,dragon-11k,menger", "--structures", "bvh,org,svo", "--levels", "5"];
+    let run = |out: &Path, shard: Option<&str>| {
+        let out = out.to_string_lossy().into_owned();
+        let mut args: Vec<&str> = matrix.to_vec();
+        args.extend_from_slice(TINY);
+        args.extend(["--no-images", "--out", &out]);
+        if let Some(shard) = shard {
+            args.extend(["--shard", shard]);
+        }
+        let o = harness(&args);
+        assert!(o.status.success(), "{shard:?}: {}", String::from_utf8_lossy(&o.stderr));
+        read_json(&Path::new(&out).join("results.json"))
+    };
+    let key = |c: &serde_json::Value| format!("{} {} {}", c["scene"], c["structure"], c["index"]);
+    let cases = |r: &serde_json::Value| r["cases"].as_array().cloned().unwrap_or_default();
+    let whole = run(&dir.join("whole"), None);
+    let shards: Vec<_> = (1..=3).map(|k| dir.join(format!("shard-{k}"))).collect();
+    let mut seen = std::collections::BTreeSet::new();
+    for (k, path) in shards.iter().enumerate() {
+        let shard = run(path, Some(&format!("{}/3", k + 1)));
+        assert_eq!(shard["settings"]["shard"], format!("{}/3", k + 1));
+        let mine = cases(&shard);
+        assert!(!mine.is_empty(), "shard {} ran nothing", k + 1);
+        for c in &mine {
+            assert!(seen.insert(key(c)), "{} is in two shards", key(c));
+        }
+    }
+    let paths: Vec<String> = shards.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+    let merged = dir.join("merged").to_string_lossy().into_owned();
+    // Given out of order: the join puts the cases back in the matrix's.
+    let o = harness(&["merge", &paths[2], &paths[0], &paths[1], "--out", &merged]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let joined = read_json(&Path::new(&merged).join("results.json"));
+    assert!(joined["settings"].get("shard").is_none() && joined.get("merged").is_none(), "one run again");
+    assert_eq!(joined["shards"].as_array().map(Vec::len), Some(3));
+    let (got, want) = (cases(&joined), cases(&whole));
+    assert_eq!(got.iter().map(key).collect::<Vec<_>>(), want.iter().map(key).collect::<Vec<_>>());
+    for (g, w) in got.iter().zip(&want) {
+        for field in ["/memory/bytes", "/memory/nodes", "/memory/pointers", "/triangles", "/render/0/hit_fraction"] {
+            assert_eq!(g.pointer(field), w.pointer(field), "{} {field}", key(g));
+        }
+        assert!(g["machine"].is_null(), "joined cases are untagged");
+    }
+    let o = harness(&["merge", &paths[0], &paths[2], "--out", &merged]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("shards missing: 2/3"));
+    let o = harness(&["merge", &paths[0], &paths[0], &paths[1], &paths[2], "--out", &merged]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("1/3 is given twice"));
+    let o = harness(&["run", "--scenes", "teapot", "--shard", "4/3"]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("1 ≤ K ≤ N"));
+}
+
 /// Without `--reps`, each build and render series takes 3 to 5 timed reps (stopping once its
 /// median is known) and records its interval; `--reps N` takes exactly N. Either way the run
 /// records where its time went.

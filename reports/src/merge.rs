@@ -3,7 +3,7 @@
 //! run its machine, git and settings records ([`Results::merged`]), so one report shows them side
 //! by side and `harness compare` can still pair each case with its own machine's reference.
 
-use crate::schema::{Case, Machine, MergedRun, Results, SCHEMA, SkippedCase};
+use crate::schema::{Case, Machine, MergedRun, Part, Results, SCHEMA, Settings, SkippedCase};
 
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
@@ -13,6 +13,8 @@ pub enum MergeError {
     DuplicateTag(String),
     #[error("nothing to merge")]
     Empty,
+    #[error("{0}")]
+    Shards(String),
 }
 
 /// Each run's hostname, with `-2`, `-3`, … appended where hostnames repeat.
@@ -50,6 +52,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         settings: first.settings.clone(),
         cases: Vec::new(),
         merged: Vec::new(),
+        shards: Vec::new(),
         parts: Vec::new(),
         skipped: Vec::new(),
         // Each run's own phases stay in its file.
@@ -96,6 +99,101 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
     Ok(merged)
 }
 
+/// The shards of one run (`harness run --shard K/N`) joined into that run: its cases in the
+/// matrix's order, untagged, as one run of every shard would have written them; each shard's own
+/// records kept in [`Results::shards`]. `None` when the runs are not shards, an error when they
+/// are shards but not every shard of one matrix of one commit, each once.
+pub fn join_shards(runs: &[Results]) -> Option<Result<Results, MergeError>> {
+    let shards: Vec<Option<(u32, u32)>> = runs.iter().map(|r| parse_shard(r.settings.shard.as_deref()?)).collect();
+    if shards.iter().all(Option::is_none) {
+        return None;
+    }
+    Some(join(runs, &shards))
+}
+
+fn parse_shard(s: &str) -> Option<(u32, u32)> {
+    let (k, n) = s.split_once('/')?;
+    Some((k.parse().ok()?, n.parse().ok()?))
+}
+
+fn join(runs: &[Results], shards: &[Option<(u32, u32)>]) -> Result<Results, MergeError> {
+    let refuse = |why: String| Err(MergeError::Shards(why));
+    let Some(first) = runs.first() else { return Err(MergeError::Empty) };
+    let Some(&Some((_, n))) = shards.first() else {
+        return refuse(format!("run {} is not a shard, the others are: merge shards alone", first.run_id));
+    };
+    let mut seen = vec![false; n as usize];
+    for (run, shard) in runs.iter().zip(shards) {
+        let Some((k, of)) = *shard else {
+            return refuse(format!("run {} is not a shard, the others are: merge shards alone", run.run_id));
+        };
+        if of != n || k == 0 || k > n {
+            return refuse(format!("shard {k}/{of} of run {} is not one of {n}", run.run_id));
+        }
+        if std::mem::replace(&mut seen[k as usize - 1], true) {
+            return refuse(format!("shard {k}/{n} is given twice"));
+        }
+        let unshard = |r: &Results| Settings { shard: None, command: String::new(), ..r.settings.clone() };
+        if unshard(run) != unshard(first) || !parts_alike(&run.parts, &first.parts) {
+            return refuse(format!("shard {k}/{n} (run {}) ran another matrix than the first", run.run_id));
+        }
+        if run.git.commit != first.git.commit {
+            return refuse(format!("shard {k}/{n} ran commit {}, the first {}", run.git.commit, first.git.commit));
+        }
+    }
+    let missing: Vec<String> = (1..=n).filter(|k| !seen[*k as usize - 1]).map(|k| format!("{k}/{n}")).collect();
+    if !missing.is_empty() {
+        return refuse(format!("shards missing: {}; merge every shard of the run", missing.join(", ")));
+    }
+    let records: Vec<MergedRun> = runs
+        .iter()
+        .zip(shards)
+        .map(|(r, s)| MergedRun {
+            tag: format!("shard-{}", s.map_or(0, |s| s.0)),
+            run_id: r.run_id.clone(),
+            created: r.created.clone(),
+            machine: r.machine.clone(),
+            git: r.git.clone(),
+            settings: r.settings.clone(),
+        })
+        .collect();
+    let one_machine = runs.iter().all(|r| r.machine.hostname == first.machine.hostname);
+    let mut cases: Vec<Case> = runs.iter().flat_map(|r| r.cases.iter().cloned()).collect();
+    // The matrix's order: parts in the run's order, then each case's place in its part.
+    let part_at = |c: &Case| first.parts.iter().position(|p| Some(&p.name) == c.part.as_ref()).unwrap_or(0);
+    cases.sort_by_key(|c| (part_at(c), c.index.unwrap_or(u64::MAX)));
+    Ok(Results {
+        run_id: format!("{}-joined", first.run_id),
+        created: runs.iter().map(|r| r.created.clone()).max().unwrap_or_default(),
+        machine: if one_machine { first.machine.clone() } else { summary_machine(&records) },
+        settings: Settings { shard: None, ..first.settings.clone() },
+        cases,
+        skipped: runs.iter().flat_map(|r| r.skipped.iter().cloned()).collect(),
+        // A part took as long as its slowest shard (the shards run side by side).
+        parts: first
+            .parts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Part { wall_s: runs.iter().map(|r| r.parts[i].wall_s).fold(0.0, f64::max), ..p.clone() })
+            .collect(),
+        shards: records,
+        // Each shard's own phases stay in its file.
+        phases_s: Default::default(),
+        ..first.clone()
+    })
+}
+
+/// The same parts, their wall times and commands aside (each shard times its own share, and its
+/// command names its shard).
+fn parts_alike(a: &[Part], b: &[Part]) -> bool {
+    let plain = |p: &Part| Part {
+        wall_s: 0.0,
+        settings: Settings { command: String::new(), ..p.settings.clone() },
+        ..p.clone()
+    };
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| plain(x) == plain(y))
+}
+
 fn tagged(case: &Case, tag: &str) -> Case {
     Case {
         machine: Some(tag.into()),
@@ -139,6 +237,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 settings: m.settings.clone(),
                 cases: results.cases.iter().filter(|c| c.machine.as_deref() == Some(&m.tag)).cloned().collect(),
                 merged: Vec::new(),
+                shards: Vec::new(),
                 parts: Vec::new(),
                 skipped: Vec::new(),
                 phases_s: Default::default(),

@@ -21,6 +21,11 @@ pub struct Results {
     /// each case names its run in [`Case::machine`]. Empty for a single run.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub merged: Vec<MergedRun>,
+    /// Set by `harness merge` when it joins the shards of one run (`harness run --shard K/N`):
+    /// each shard's own run, machine, git and settings records (their tags `shard-K`). The cases
+    /// are the matrix's, untagged, in its order.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub shards: Vec<MergedRun>,
     /// A run of many parts (the `paper` preset): each part one reproduction's own preset with its
     /// own settings; each case names its part in [`Case::part`]. Empty for a run of one preset.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -213,6 +218,9 @@ pub struct Settings {
     /// Cargo profile and optimisation level the harness was compiled with.
     pub build_profile: String,
     pub params: BTreeMap<String, String>,
+    /// `K/N` for a run of one shard of the matrix (`--shard`); absent for a whole run.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub shard: Option<String>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -397,6 +405,7 @@ impl Results {
             settings: self.settings.clone(),
             cases: Vec::new(),
             merged: self.merged.clone(),
+            shards: self.shards.clone(),
             parts: Vec::new(),
             skipped: Vec::new(),
             phases_s: self.phases_s.clone(),
