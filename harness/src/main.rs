@@ -23,6 +23,7 @@ mod resume;
 mod run;
 mod shadows;
 mod shard;
+mod timing;
 
 use std::process::ExitCode;
 

@@ -57,7 +57,7 @@ pub fn measure(c: ShadowCaseInput, plan: &Plan, bar: &ProgressBar, budget: &Budg
     bar.set_message(format!("{}/{structure}: building", scene.name));
     // The reference is built in alternation with the DAG (timed), and once more for the
     // comparison's primary hits and shadow rays.
-    let (dag, build) = crate::run::timed(
+    let (dag, build) = crate::timing::timed(
         Some(|| kernels::build_structure(REFERENCE, &input).context("the reference exists")?.map_err(Into::into)),
         || Ok(ShadowSvdag::build(&input)?),
         plan,

@@ -38,7 +38,7 @@ impl Claim {
             self.ours,
             self.expectation(),
             self.expected,
-            crate::paper::held(self.held)
+            held(self.held)
         )
     }
 
@@ -250,6 +250,11 @@ pub fn rows<'a>(claims: &'a [(String, String, Claim)]) -> Vec<Row<'a>> {
         }
     }
     rows
+}
+
+/// How a claim's verdict reads in a table.
+pub(crate) fn held(ok: bool) -> &'static str {
+    if ok { "**held**" } else { "**not held**" }
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::schema::{Case, RenderStats, Results};
+use crate::schema::{Case, Results};
 
 /// Growth exponents up to this count as linear (the issue's threshold).
 const LINEAR: f64 = 1.1;
@@ -87,7 +87,7 @@ fn esvo_scale(results: &Results) -> Sheet {
             .filter(|p| p.scene == c.scene && p.variant.is_none() && c.variant.is_none())
             .map_or("—".into(), |p| format!("{:.2}×", bytes / p.memory.bytes.max(1) as f64));
         let peak_ratio = c.build.peak_bytes as f64 / bytes.max(1.0);
-        let r = cpu_primary(c);
+        let r = c.cpu_primary();
         let mrays = r.as_ref().map_or("—".into(), |r| format!("{:.2}", r.mrays_per_s));
         let bvh_mrays = r
             .as_ref()
@@ -134,7 +134,7 @@ fn esvo_scale(results: &Results) -> Sheet {
             // The LOD case against the plain cases two or more levels below.
             for low in cases.iter().filter(|l| l.scene == c.scene && l.variant.is_none() && l.resolution < c.resolution)
             {
-                let low_steps = cpu_primary(low).map_or(f64::NAN, |r| r.steps_per_ray_mean);
+                let low_steps = low.cpu_primary().map_or(f64::NAN, |r| r.steps_per_ray_mean);
                 let low_level = low.resolution.unwrap_or(1).trailing_zeros();
                 if low_level == 11 {
                     claims.push(Check {
@@ -154,7 +154,7 @@ fn esvo_scale(results: &Results) -> Sheet {
         {
             // What the split costs a ray: each side's rate over its own paired bvh.
             let rel = |x: &Case| {
-                cpu_primary(x).and_then(|r| {
+                x.cpu_primary().and_then(|r| {
                     Some(r.rays as f64 / r.timing.ms_median / (r.rays as f64 / r.reference_timing.as_ref()?.ms_median))
                 })
             };
@@ -216,7 +216,7 @@ fn esvo_beam(results: &Results) -> Sheet {
     out.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     let mut checks = Vec::new();
     for (off, on) in pairs {
-        let (Some(a), Some(b)) = (cpu_primary(off), cpu_primary(on)) else { continue };
+        let (Some(a), Some(b)) = (off.cpu_primary(), on.cpu_primary()) else { continue };
         let change = b.steps_per_ray_mean / a.steps_per_ray_mean.max(f64::MIN_POSITIVE) - 1.0;
         let bvh = a.reference_timing.as_ref().map_or("—".into(), |t| format!("{:.1}", t.ms_median));
         let _ = writeln!(
@@ -316,7 +316,7 @@ fn esvo_budget(results: &Results) -> Sheet {
                     ours: format!("{t:.2} B{cause}"),
                     held: ok,
                 });
-                held(ok)
+                crate::claims::held(ok)
             }
             _ => "—",
         };
@@ -339,34 +339,6 @@ fn esvo_budget(results: &Results) -> Sheet {
     }
     out.push('\n');
     out
-}
-
-/// Least-squares slope of ln y over ln x: the exponent k of y ∝ x^k. `None` with fewer than two
-/// distinct x or any non-positive value.
-pub fn growth_exponent(points: &[(f64, f64)]) -> Option<f64> {
-    if points.iter().any(|&(x, y)| x <= 0.0 || y <= 0.0) {
-        return None;
-    }
-    let n = points.len() as f64;
-    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| (a + x.ln() / n, b + y.ln() / n));
-    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-        let dx = x.ln() - mx;
-        (a + dx * (y.ln() - my), b + dx * dx)
-    });
-    (sxx > 0.0).then(|| sxy / sxx)
-}
-
-pub(crate) fn cpu_render_ms(case: &Case) -> Option<f64> {
-    cpu_primary(case).map(|r| r.timing.ms_median)
-}
-
-/// The case's CPU render of primary rays.
-pub(crate) fn cpu_primary(case: &Case) -> Option<&RenderStats> {
-    case.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary")
-}
-
-pub(crate) fn held(ok: bool) -> &'static str {
-    if ok { "**held**" } else { "**not held**" }
 }
 
 fn fmt_exp(k: Option<f64>) -> String {
@@ -442,7 +414,7 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
                 cells: [b.memory.nodes as f64, m.memory.nodes as f64],
                 pointers: [b.memory.pointers as f64, m.memory.pointers as f64],
                 build: [b.build.timing.ms_median, m.build.timing.ms_median],
-                render: [cpu_render_ms(b)?, cpu_render_ms(m)?],
+                render: [b.cpu_render_ms()?, m.cpu_render_ms()?],
             };
             Some((*scene, row))
         })
@@ -534,7 +506,7 @@ fn scaling(results: &Results, s: Scaling) -> Sheet {
 /// beside the other structure's (steps, and triangle tests), e.g. " (ORG 25.1 steps and 14.0
 /// tests per ray, bvh 9.0 and 3.1)"; empty for a claim held or a structure not counted.
 fn work_beside(org: &Case, other: Option<&Case>, held: bool) -> String {
-    match (held, cpu_primary(org), other.and_then(|c| Some((c, cpu_primary(c)?)))) {
+    match (held, org.cpu_primary(), other.and_then(|c| Some((c, c.cpu_primary()?)))) {
         (false, Some(o), Some((c, r))) if c.structure != "org" && r.steps_per_ray_mean > 0.0 => format!(
             " (ORG {:.1} steps and {:.1} tests per ray, {} {:.1} and {:.1})",
             o.steps_per_ray_mean,
@@ -693,7 +665,9 @@ fn scaling_table(out: &mut Sheet, rows: &[Row], s: &Scaling) -> [(&'static str, 
     } else {
         levels_table(out, rows, s);
     }
-    let fit = |f: &dyn Fn(&Row) -> f64| growth_exponent(&rows.iter().map(|r| (r.n, f(r))).collect::<Vec<_>>());
+    let fit = |f: &dyn Fn(&Row) -> f64| {
+        crate::scaling::growth_exponent(&rows.iter().map(|r| (r.n, f(r))).collect::<Vec<_>>())
+    };
     let exps = [
         ("cells", [fit(&|r| r.cells[0]), fit(&|r| r.cells[1])]),
         ("pointers", [fit(&|r| r.pointers[0]), fit(&|r| r.pointers[1])]),
@@ -771,7 +745,7 @@ fn table1(results: &Results) -> Sheet {
         let Some(org) = cases.iter().find(|c| c.structure == "org") else { continue };
         let n = org.triangles as f64;
         let org_cp = (org.memory.nodes + org.memory.pointers) as f64;
-        let (org_tc, org_tr) = (org.build.timing.ms_median, cpu_render_ms(org).unwrap_or(f64::NAN));
+        let (org_tc, org_tr) = (org.build.timing.ms_median, org.cpu_render_ms().unwrap_or(f64::NAN));
         let _ = writeln!(out, "### {scene} (N = {})\n", org.triangles);
         let _ = writeln!(
             out,
@@ -780,7 +754,7 @@ fn table1(results: &Results) -> Sheet {
         let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|");
         for c in &cases {
             let (nc, np) = (c.memory.nodes as f64, c.memory.pointers as f64);
-            let (tc, tr) = (c.build.timing.ms_median, cpu_render_ms(c).unwrap_or(f64::NAN));
+            let (tc, tr) = (c.build.timing.ms_median, c.cpu_render_ms().unwrap_or(f64::NAN));
             let _ = writeln!(
                 out,
                 "| {} | {:.1} ({:.1}) | {:.1} ({:.1}) | {:.1} ({:.1}) | {:.1} ({:.1}) | {:.1} ({:.1}) | {:.1} ({:.1}) |",
@@ -816,7 +790,7 @@ fn table1(results: &Results) -> Sheet {
         let _ = writeln!(out, "\n| per primary ray | steps | node/cell visits | triangle tests | Mrays/s |");
         let _ = writeln!(out, "|---|---:|---:|---:|---:|");
         for c in &cases {
-            if let Some(r) = cpu_primary(c) {
+            if let Some(r) = c.cpu_primary() {
                 let _ = writeln!(
                     out,
                     "| {} | {:.1} | {:.1} | {:.2} | {:.2} |",
@@ -830,8 +804,8 @@ fn table1(results: &Results) -> Sheet {
         }
         let (rc, rp) = (org.memory.nodes as f64 / n, org.memory.pointers as f64 / n);
         let fastest_build = cases.iter().all(|c| c.build.timing.ms_median >= org_tc);
-        let best_render = cases.iter().filter_map(|c| cpu_render_ms(c)).fold(f64::INFINITY, f64::min);
-        let fastest_render = cases.iter().copied().find(|c| cpu_render_ms(c) == Some(best_render));
+        let best_render = cases.iter().filter_map(|c| c.cpu_render_ms()).fold(f64::INFINITY, f64::min);
+        let fastest_render = cases.iter().copied().find(|c| c.cpu_render_ms() == Some(best_render));
         let fastest_other = cases
             .iter()
             .filter(|c| c.structure != "org")
@@ -841,7 +815,7 @@ fn table1(results: &Results) -> Sheet {
         // ORG renders within 0.6–2.1× of it).
         let kdtree = cases.iter().find(|c| c.structure == "kdtree");
         let kd_build = kdtree.map_or(f64::NAN, |c| c.build.timing.ms_median / org_tc);
-        let kd_render = kdtree.and_then(|c| cpu_render_ms(c)).map_or(f64::NAN, |tr| org_tr / tr);
+        let kd_render = kdtree.and_then(|c| c.cpu_render_ms()).map_or(f64::NAN, |tr| org_tr / tr);
         // What sets a ratio outside the paper's range, as the build measured it: the top grid's
         // resolution (Algorithm 1 rounds each axis to whole cells, so λN cells become a few % fewer
         // or more), the cells of each level, and how many top cells a face's box spans.
@@ -965,7 +939,7 @@ fn table1(results: &Results) -> Sheet {
 mod tests {
     use super::*;
 
-    use crate::schema::{BuildStats, MemoryStats, Settings, Timing};
+    use crate::schema::{BuildStats, MemoryStats, RenderStats, Settings, Timing};
 
     /// An ESVO case at `level` with `blocks` blocks, `bytes`, a build `peak`, `steps` per ray and
     /// a render at `rate`× its paired bvh; `stored` of `fitted` contours.
@@ -1202,10 +1176,10 @@ mod tests {
     #[test]
     fn exponents_of_power_laws() {
         let linear: Vec<(f64, f64)> = [1e3, 1e4, 1e5].iter().map(|&n| (n, 3.0 * n)).collect();
-        assert!((growth_exponent(&linear).unwrap() - 1.0).abs() < 1e-9);
+        assert!((crate::scaling::growth_exponent(&linear).unwrap() - 1.0).abs() < 1e-9);
         let five_thirds: Vec<(f64, f64)> = [1e3, 1e4, 1e5].iter().map(|&n: &f64| (n, n.powf(5.0 / 3.0))).collect();
-        assert!((growth_exponent(&five_thirds).unwrap() - 5.0 / 3.0).abs() < 1e-9);
-        assert_eq!(growth_exponent(&[(10.0, 1.0)]), None);
-        assert_eq!(growth_exponent(&[(10.0, 1.0), (20.0, 0.0)]), None);
+        assert!((crate::scaling::growth_exponent(&five_thirds).unwrap() - 5.0 / 3.0).abs() < 1e-9);
+        assert_eq!(crate::scaling::growth_exponent(&[(10.0, 1.0)]), None);
+        assert_eq!(crate::scaling::growth_exponent(&[(10.0, 1.0), (20.0, 0.0)]), None);
     }
 }

@@ -5,7 +5,6 @@
 
 use std::collections::BTreeMap;
 
-use crate::paper::growth_exponent;
 use crate::schema::{Case, Results};
 
 /// What a study's x axis counts.
@@ -113,6 +112,21 @@ fn study(
         })
         .collect();
     (!series.is_empty()).then_some(Study { title, x, y_label, series })
+}
+
+/// Least-squares slope of ln y over ln x: the exponent k of y ∝ x^k. `None` with fewer than two
+/// distinct x or any non-positive value.
+pub fn growth_exponent(points: &[(f64, f64)]) -> Option<f64> {
+    if points.iter().any(|&(x, y)| x <= 0.0 || y <= 0.0) {
+        return None;
+    }
+    let n = points.len() as f64;
+    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| (a + x.ln() / n, b + y.ln() / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+        let dx = x.ln() - mx;
+        (a + dx * (y.ln() - my), b + dx * dx)
+    });
+    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 #[cfg(test)]

@@ -371,6 +371,18 @@ impl Case {
     }
 }
 
+impl Case {
+    /// The case's CPU render of primary rays.
+    pub fn cpu_primary(&self) -> Option<&RenderStats> {
+        self.render.iter().find(|r| r.backend == "cpu" && r.workload == "primary")
+    }
+
+    /// The median time of [`Case::cpu_primary`], ms.
+    pub fn cpu_render_ms(&self) -> Option<f64> {
+        self.cpu_primary().map(|r| r.timing.ms_median)
+    }
+}
+
 impl Results {
     /// Scene names in the order their first case ran.
     pub fn scenes(&self) -> Vec<&str> {

@@ -9,7 +9,6 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::paper::cpu_render_ms;
 use crate::schema::{Case, Results};
 
 /// SVO / SVDAG node ratio the paper's abstract range starts at (1/11 … 1/135).
@@ -360,13 +359,13 @@ fn fig13(out: &mut Sheet, results: &Results, scenes: &[&str]) {
     out.push_str("|---|---:|---:|---:|---:|---:|---:|---|\n");
     let mut claims = Vec::new();
     let steps = |c: Option<&Case>| {
-        c.and_then(crate::paper::cpu_primary).map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean))
+        c.and_then(Case::cpu_primary).map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean))
     };
     for &scene in scenes {
         let [svo, esvo, bits, bricks] =
             [("svo", None), ("esvo", None), ("svdag", Some("bits")), ("svdag", Some("bricks"))]
                 .map(|(s, v)| find(results, scene, s, 10, v));
-        let ms = |c: Option<&Case>| c.and_then(cpu_render_ms);
+        let ms = |c: Option<&Case>| c.and_then(Case::cpu_render_ms);
         let (Some(s), Some(e), Some(d)) = (ms(svo), ms(esvo), ms(bits)) else { continue };
         let cell = |x: Option<f64>| x.map_or("—".into(), |x| format!("{x:.1}"));
         let _ = writeln!(

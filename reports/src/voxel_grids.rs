@@ -9,7 +9,6 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::paper::cpu_primary as primary;
 use crate::schema::{Case, Results};
 
 /// The structures this section is about.
@@ -32,7 +31,7 @@ const BRICKMAP_RANGE: (f64, f64) = (0.84, 1.74);
 const BUILD_VS_SVDAG: f64 = 1.5;
 
 fn mrays(c: &Case) -> Option<f64> {
-    primary(c).map(|r| r.mrays_per_s).filter(|m| *m > 0.0)
+    c.cpu_primary().map(|r| r.mrays_per_s).filter(|m| *m > 0.0)
 }
 
 fn level(c: &Case) -> Option<u32> {
@@ -81,7 +80,7 @@ fn label(c: &Case) -> String {
 
 /// `side: steps` for each level a grid's empty steps were taken at.
 fn steps_by_level(c: &Case) -> String {
-    let Some(r) = primary(c) else { return "—".into() };
+    let Some(r) = c.cpu_primary() else { return "—".into() };
     let sides = c.params.get(c.structure.as_str()).and_then(|p| p.get("level_sides")).and_then(|s| s.as_array());
     match (sides, r.steps_per_level.is_empty()) {
         (Some(sides), false) => sides
@@ -157,7 +156,7 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
         _ => "—".into(),
     };
     for c in rows {
-        let r = primary(c);
+        let r = c.cpu_primary();
         let _ = writeln!(
             out,
             "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {:.0} | {} | {} |",
@@ -180,8 +179,8 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
             "| bvh (triangles) | {} | {} | {} | {} | — | — | — | {:.0} | — | {} |",
             mrays(b).map_or("—".into(), |m| format!("{m:.2}")),
             ratio(b),
-            primary(b).map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean)),
-            primary(b).map_or("—".into(), |r| format!("{:.1}", r.node_visits_per_ray_mean)),
+            b.cpu_primary().map_or("—".into(), |r| format!("{:.1}", r.steps_per_ray_mean)),
+            b.cpu_primary().map_or("—".into(), |r| format!("{:.1}", r.node_visits_per_ray_mean)),
             b.build.timing.ms_median,
             crate::plots::bytes(b.build.peak_bytes as f64),
         );
@@ -225,7 +224,7 @@ fn claims(out: &mut Sheet, scene: &str, l: u32, at: &[&Case]) {
             format!("{x:.2}×"),
             x >= TREE64_SPEEDUP,
         );
-        if let (Some(a), Some(b)) = (primary(t), primary(esvo)) {
+        if let (Some(a), Some(b)) = (t.cpu_primary(), esvo.cpu_primary()) {
             check(
                 format!("tree64 takes fewer steps per ray than {esvo_label}"),
                 "fewer (published 2.1–2.4× fewer)".into(),

@@ -16,9 +16,10 @@
 //! frame, no dependence on how many frames the animation has. Motion is bounded for every t (loops,
 //! rotations, cyclic respawn), so frames past `frames` are as valid as the ones before.
 
-use crate::builtin::DEFAULT_SEED;
 use crate::procedural;
-use crate::scene::Scene;
+use crate::procedural::DEFAULT_SEED;
+pub use crate::scene::Animation;
+use crate::scene::{Generator, Scene};
 
 /// The animated scenes (not in `BUILTIN_SCENES`: the default matrix does not run them).
 pub const ANIMATED_SCENES: &[&str] = &["kitchen-anim", "robots-anim", "fire-anim"];
@@ -31,17 +32,6 @@ pub const FRAMES_PER_SECOND: u32 = 24;
 
 /// Seconds between frames.
 pub const DT: f32 = 1.0 / FRAMES_PER_SECOND as f32;
-
-/// Which procedural generator an animation's frames come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Generator {
-    /// A kitchen with a few moving objects: mostly static, like BART Kitchen.
-    Kitchen,
-    /// Walking articulated robots: mostly dynamic, like BART Robots.
-    Robots,
-    /// Rising, tumbling particles over a hearth: dynamic and random, like BART Fire.
-    Fire,
-}
 
 impl Generator {
     fn named(name: &str) -> Option<Self> {
@@ -60,18 +50,6 @@ impl Generator {
             Self::Fire => procedural::fire_anim(seed, time),
         }
     }
-}
-
-/// A deterministic animation: frame `t` of it is a [`Scene`] computed directly from the seed and
-/// `t` (see the module documentation for what all frames share).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Animation {
-    /// The animated scene's name (`kitchen-anim`, …).
-    pub name: String,
-    pub seed: u64,
-    /// Frames 0..frames form the animation.
-    pub frames: u32,
-    generator: Generator,
 }
 
 impl Animation {

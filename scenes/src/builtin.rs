@@ -5,11 +5,8 @@ use std::path::Path;
 use crate::anim::{ANIMATED_SCENES, Animation, DEFAULT_FRAMES};
 use crate::error::SceneError;
 use crate::load;
-use crate::procedural;
+use crate::procedural::{self, DEFAULT_SEED};
 use crate::scene::Scene;
-
-/// The seed every procedural scene uses unless a caller asks for another.
-pub const DEFAULT_SEED: u64 = 0xACCE_1BE7C4;
 
 /// Every built-in scene, in the order the default matrix runs them. `grass-<N>` accepts any N;
 /// `grass-10k` stands for the family here.

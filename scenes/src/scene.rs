@@ -5,7 +5,6 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::anim::Animation;
 use crate::camera::CameraSpec;
 use crate::geom::Aabb;
 use crate::mesh::{Dropped, Mesh};
@@ -114,4 +113,27 @@ impl Scene {
     pub fn triangles(&self) -> Arc<[Triangle]> {
         (0..self.mesh.triangle_count()).map(|i| self.mesh.triangle(i)).collect()
     }
+}
+
+/// A deterministic animation: frame `t` of it is a [`Scene`] computed directly from the seed and
+/// `t` ([`Animation::frame`], in `crate::anim`, whose documentation says what all frames share).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Animation {
+    /// The animated scene's name (`kitchen-anim`, …).
+    pub name: String,
+    pub seed: u64,
+    /// Frames 0..frames form the animation.
+    pub frames: u32,
+    pub(crate) generator: Generator,
+}
+
+/// Which procedural generator an animation's frames come from (`crate::anim` runs it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Generator {
+    /// A kitchen with a few moving objects: mostly static, like BART Kitchen.
+    Kitchen,
+    /// Walking articulated robots: mostly dynamic, like BART Robots.
+    Robots,
+    /// Rising, tumbling particles over a hearth: dynamic and random, like BART Fire.
+    Fire,
 }

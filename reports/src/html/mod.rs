@@ -562,7 +562,7 @@ fn scene_charts(out: &mut String, scene: &str, cases: &[&Case]) {
     let choices: Vec<plots::Choice> = cases
         .iter()
         .filter_map(|c| {
-            let r = crate::paper::cpu_primary(c)?;
+            let r = c.cpu_primary()?;
             Some(plots::Choice { label: c.label(), bytes: c.memory.bytes as f64, mrays_per_s: r.mrays_per_s })
         })
         .collect();

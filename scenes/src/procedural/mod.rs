@@ -6,7 +6,7 @@
 //! generator, parameters and seed, and its `objects` partition the triangles in order.
 //!
 //! The animated scenes (`*_anim`) are pure functions of (seed, time) as well; they are reached
-//! through [`crate::anim::Animation`], which adds the frame to their name and provenance.
+//! through [`crate::scene::Animation`], which adds the frame to their name and provenance.
 
 mod city;
 mod fire_anim;
@@ -25,6 +25,9 @@ mod tests;
 
 use crate::mesh::Mesh;
 use crate::scene::Scene;
+
+/// The seed every procedural scene uses unless a caller asks for another.
+pub const DEFAULT_SEED: u64 = 0xACCE_1BE7C4;
 
 /// The Menger sponge level of the `menger` scene: 8000 cubes, 36 096 triangles.
 pub const MENGER_LEVEL: u32 = 3;

@@ -49,8 +49,6 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-pub use super::compress::compress_block;
-
 // ---------------------------------------------------------------------------------------------
 // Uncompressed colour (§5.4, Fig. 7a)
 // ---------------------------------------------------------------------------------------------
@@ -437,6 +435,7 @@ pub(super) fn saturate(c: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::esvo::compress::compress_block;
     use glam::{DVec3, Quat};
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64Mcg;

@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::attributes::{CompressedBlock, compress_block};
-use super::build::limit;
+use super::attributes::CompressedBlock;
+use super::compress::compress_block;
+use super::layout::limit;
 use super::layout::*;
 use super::{Attributes, EsvoStats};
 use crate::BuildError;

@@ -35,6 +35,7 @@ use scenes::Scene;
 use super::blocks::{BlockCap, BlockWriter};
 use super::emit::Emitter;
 use super::fit::{ContourFitter, FitBuffers, Voxel};
+use super::layout::limit;
 use super::{Esvo, EsvoParams};
 use crate::BuildError;
 use crate::ms_since;
@@ -264,10 +265,6 @@ impl Streamer {
             voxelize,
         })
     }
-}
-
-pub(super) fn limit(detail: String) -> BuildError {
-    BuildError::Limit { structure: "esvo", detail }
 }
 
 /// The ancestors of the current sub-cube, levels `0..=s`: each one's code, candidate triangles

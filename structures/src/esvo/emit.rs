@@ -5,7 +5,7 @@
 use super::Attributes;
 use super::attributes::{encode_abgr, encode_normal};
 use super::blocks::{Below, BlockWriter, OpenBlock, Slot};
-use super::build::limit;
+use super::layout::limit;
 use super::layout::*;
 use crate::BuildError;
 use crate::voxel::Octree;

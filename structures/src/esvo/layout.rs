@@ -101,3 +101,9 @@ pub use crate::voxel::morton::rank;
 pub fn page_of(slot: usize) -> usize {
     slot & !(PAGE_SLOTS - 1)
 }
+
+/// A layout limit the build ran into (a pointer field too narrow for what it must reach), as the
+/// build's error.
+pub(super) fn limit(detail: String) -> crate::BuildError {
+    crate::BuildError::Limit { structure: "esvo", detail }
+}
