@@ -15,9 +15,5 @@ pub mod plots;
 pub mod references;
 pub mod scaling;
 pub mod schema;
-pub mod svdag_shadow;
-pub mod svdag_tables;
-pub mod svdag_temporal;
-pub mod voxel_grids;
 
 pub use schema::*;
