@@ -7,6 +7,7 @@
 mod agreement;
 mod alloc;
 mod budget;
+mod case;
 mod cli;
 mod compare;
 mod eta;

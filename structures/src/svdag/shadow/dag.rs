@@ -4,7 +4,6 @@
 
 use std::borrow::Cow;
 use std::collections::HashMap;
-
 use std::time::Instant;
 
 use rayon::prelude::*;

@@ -2,7 +2,6 @@
 //! the six cube faces a light inside the scene looks through.
 
 use glam::{DVec3, Vec3};
-
 use scenes::Scene;
 use serde::Serialize;
 
