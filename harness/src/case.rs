@@ -20,11 +20,12 @@ use structures::{BuildInput, Params};
 use crate::agreement;
 use crate::alloc;
 use crate::budget::{self, Budget};
-use crate::cli::{Backend, Plan, RunArgs};
+use crate::cli::{Backend, RunArgs};
 use crate::gpu;
 use crate::images;
 use crate::output::RunOutput;
 use crate::phases::{self, Phase};
+use crate::plan::Plan;
 use crate::reps;
 use crate::timing;
 

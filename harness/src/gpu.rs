@@ -11,7 +11,7 @@ use reports::{GpuStats, RenderStats, Timing};
 use scenes::Camera;
 
 use crate::agreement;
-use crate::cli::Plan;
+use crate::plan::Plan;
 
 /// The adapter the run uses, chosen once. Asking for the GPU backend (`--gpu`, `--backend gpu`)
 /// and not getting an adapter stops the run: its results would silently lack what was asked for.

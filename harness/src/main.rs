@@ -17,6 +17,7 @@ mod machine;
 mod merge;
 mod output;
 mod phases;
+mod plan;
 mod probes;
 mod render;
 mod reps;

@@ -18,12 +18,13 @@ use structures::{BuildInput, Params};
 
 use crate::budget::{self, Budget, BudgetError};
 use crate::case::{CaseRun, SceneRun, backend_name, measure_case, one_line};
-use crate::cli::{Backend, PartPlan, Plan, RunArgs};
+use crate::cli::{Backend, RunArgs};
 use crate::eta::{Eta, EtaCase};
 use crate::gpu;
 use crate::machine;
 use crate::output::{CaseKey, Interrupted, RunOutput};
 use crate::phases::{self, Phase};
+use crate::plan::{PartPlan, Plan};
 use crate::resume;
 use crate::shadows;
 use crate::shard;

@@ -26,8 +26,8 @@ use structures::voxel::VoxelGrid;
 use structures::{BuildInput, Structure};
 
 use crate::budget::{self, Budget};
-use crate::cli::Plan;
 use crate::phases::{self, Phase};
+use crate::plan::Plan;
 
 /// The ray structures whose shadow rays stand beside the point queries.
 const RAY_STRUCTURES: [&str; 4] = ["bvh", "esvo", "svdag", "org"];

@@ -9,8 +9,8 @@ use reports::{BuildStats, Timing};
 use structures::ms_since;
 
 use crate::alloc;
-use crate::cli::Plan;
 use crate::phases::{self, Phase};
+use crate::plan::Plan;
 use crate::reps;
 
 /// Runs `build` up to `build_warmup + build_reps` times, each timed rep after one `reference`
