@@ -17,7 +17,7 @@
 //! the old and the advanced position (§6, Fig. 14): in `[1, 2)` the mantissa bit `s` of a
 //! coordinate is the child-slot bit of the cube at scale `s`.
 
-use glam::{Vec3, Vec3A};
+use glam::{BVec3A, Vec3, Vec3A};
 
 use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
 use crate::Stats;
@@ -145,7 +145,7 @@ pub fn cast<L: CastNodes, S: Stats>(
                 && let (Some(span_of), Some(contour)) = (contour_span, nodes.contour(parent, &d, slot))
             {
                 stats.prim_test();
-                let (cube_min, size) = world_cube(pos.into(), scale_exp2, r.mirror_mask);
+                let (cube_min, size) = world_cube(pos, scale_exp2, r.mirror_mask);
                 let (lo, hi) = span_of(contour, cube_min, size, ray);
                 t_min = above(t_min, lo);
                 tv_max = below(tv_max, hi);
@@ -251,16 +251,16 @@ fn coords(pos: Vec3, scale: u32, mirror_mask: u32) -> ([u32; 3], u32) {
     (c, level)
 }
 
-/// The world-oriented octree-space cube (minimum corner, side) of the mirrored cube at `pos`.
-#[inline]
-pub fn world_cube(pos: Vec3, size: f32, mirror_mask: u32) -> (Vec3, f32) {
-    let mut lo = pos;
-    for a in 0..3 {
-        if mirror_mask >> a & 1 == 1 {
-            lo[a] = 3.0 - pos[a] - size;
-        }
-    }
-    (lo, size)
+/// The world-oriented octree-space cube (minimum corner, side) of the mirrored cube at `pos`:
+/// `3 − pos − size` on a mirrored axis (`mirror_mask` bit set), `pos` on the others. Both are
+/// computed in one register and the axes picked by a mask (the arithmetic of each lane is the
+/// scalar `3.0 - pos[a] - size`, so the corner is the same bit for bit), instead of a branch per
+/// axis on every contour test.
+#[inline(always)]
+pub fn world_cube(pos: Vec3A, size: f32, mirror_mask: u32) -> (Vec3, f32) {
+    let mirrored = BVec3A::new(mirror_mask & 1 != 0, mirror_mask & 2 != 0, mirror_mask & 4 != 0);
+    let flipped = Vec3A::splat(3.0) - pos - Vec3A::splat(size);
+    (Vec3A::select(mirrored, flipped, pos).into(), size)
 }
 
 /// ADVANCE (Fig. 15 lines 28–30): moves the mirrored cube at `pos` (side `size`) one cube down
@@ -280,7 +280,7 @@ impl<N> CastHit<N> {
     pub fn at(t: f32, parent: N, slot: u32, pos: Vec3, scale: u32, mirror_mask: u32) -> Self {
         let size = f32::from_bits((scale + 127 - S_MAX) << 23);
         let (coords, level) = coords(pos, scale, mirror_mask);
-        let (cube_min, cube_size) = world_cube(pos, size, mirror_mask);
+        let (cube_min, cube_size) = world_cube(pos.into(), size, mirror_mask);
         CastHit { t, parent, slot, level, coords, cube_min, cube_size }
     }
 }
