@@ -11,40 +11,9 @@
 //! consecutive runs of cases only where the unit costs more than a shard's share; the units are
 //! then dealt, dearest first, to the shard with least so far (ties to the lower shard).
 
-use std::fmt;
-use std::str::FromStr;
+pub use reports::merge::Shard;
 
 use crate::eta::PRIOR_EXPONENT;
-
-/// Shard `k` of `n` (1-based, as job arrays number their tasks).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shard {
-    pub k: u32,
-    pub n: u32,
-}
-
-/// More shards than this is a typo, not a job array.
-const MAX_SHARDS: u32 = 10_000;
-
-impl FromStr for Shard {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("'{s}': expected K/N with 1 ≤ K ≤ N ≤ {MAX_SHARDS}, e.g. 2/3");
-        let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let (k, n) = (k.trim().parse::<u32>().map_err(|_| bad())?, n.trim().parse::<u32>().map_err(|_| bad())?);
-        if k == 0 || k > n || n > MAX_SHARDS {
-            return Err(bad());
-        }
-        Ok(Shard { k, n })
-    }
-}
-
-impl fmt::Display for Shard {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "{}/{}", self.k, self.n)
-    }
-}
 
 /// The expected cost of one case of `scene`.
 pub fn case_cost(scene: &str) -> f64 {
@@ -102,15 +71,6 @@ fn chunk_ranges<U: PartialEq>(cases: &[(U, f64)]) -> Vec<std::ops::Range<usize>>
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn shards_parse_as_k_of_n() {
-        assert_eq!("2/3".parse::<Shard>(), Ok(Shard { k: 2, n: 3 }));
-        assert_eq!("1/1".parse::<Shard>().map(|s| s.to_string()), Ok("1/1".into()));
-        for bad in ["0/3", "4/3", "3", "a/b", "1/0", "1/20000", "-1/2"] {
-            assert!(bad.parse::<Shard>().is_err(), "{bad}");
-        }
-    }
 
     #[test]
     fn every_case_has_one_shard_and_the_shards_are_balanced() {

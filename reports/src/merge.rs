@@ -3,6 +3,9 @@
 //! run its machine, git and settings records ([`Results::merged`]), so one report shows them side
 //! by side and `harness compare` can still pair each case with its own machine's reference.
 
+use std::fmt;
+use std::str::FromStr;
+
 use crate::schema::{Case, Machine, MergedRun, Part, Results, SCHEMA, Settings, SkippedCase};
 
 #[derive(Debug, thiserror::Error)]
@@ -69,14 +72,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
             return Err(MergeError::Schema { run_id: run.run_id.clone(), schema: run.schema.clone() });
         }
         if run.merged.is_empty() {
-            merged.merged.push(MergedRun {
-                tag: tag.clone(),
-                run_id: run.run_id.clone(),
-                created: run.created.clone(),
-                machine: run.machine.clone(),
-                git: run.git.clone(),
-                settings: run.settings.clone(),
-            });
+            merged.merged.push(MergedRun::of(tag.clone(), run));
             merged.cases.extend(run.cases.iter().map(|c| tagged(c, tag)));
             merged
                 .skipped
@@ -99,35 +95,61 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
     Ok(merged)
 }
 
+/// Shard `k` of `n` of a run's case matrix (`harness run --shard K/N`; 1-based, as job arrays
+/// number their tasks), recorded in [`Settings::shard`] as `K/N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub k: u32,
+    pub n: u32,
+}
+
+/// More shards than this is a typo, not a job array.
+const MAX_SHARDS: u32 = 10_000;
+
+impl FromStr for Shard {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}': expected K/N with 1 ≤ K ≤ N ≤ {MAX_SHARDS}, e.g. 2/3");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (k, n) = (k.trim().parse::<u32>().map_err(|_| bad())?, n.trim().parse::<u32>().map_err(|_| bad())?);
+        if k == 0 || k > n || n > MAX_SHARDS {
+            return Err(bad());
+        }
+        Ok(Shard { k, n })
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{}/{}", self.k, self.n)
+    }
+}
+
 /// The shards of one run (`harness run --shard K/N`) joined into that run: its cases in the
 /// matrix's order, untagged, as one run of every shard would have written them; each shard's own
 /// records kept in [`Results::shards`]. `None` when the runs are not shards, an error when they
 /// are shards but not every shard of one matrix of one commit, each once.
 pub fn join_shards(runs: &[Results]) -> Option<Result<Results, MergeError>> {
-    let shards: Vec<Option<(u32, u32)>> = runs.iter().map(|r| parse_shard(r.settings.shard.as_deref()?)).collect();
+    let shards: Vec<Option<Shard>> = runs.iter().map(|r| r.settings.shard.as_deref()?.parse().ok()).collect();
     if shards.iter().all(Option::is_none) {
         return None;
     }
     Some(join(runs, &shards))
 }
 
-fn parse_shard(s: &str) -> Option<(u32, u32)> {
-    let (k, n) = s.split_once('/')?;
-    Some((k.parse().ok()?, n.parse().ok()?))
-}
-
-fn join(runs: &[Results], shards: &[Option<(u32, u32)>]) -> Result<Results, MergeError> {
+fn join(runs: &[Results], shards: &[Option<Shard>]) -> Result<Results, MergeError> {
     let refuse = |why: String| Err(MergeError::Shards(why));
     let Some(first) = runs.first() else { return Err(MergeError::Empty) };
-    let Some(&Some((_, n))) = shards.first() else {
+    let Some(&Some(Shard { n, .. })) = shards.first() else {
         return refuse(format!("run {} is not a shard, the others are: merge shards alone", first.run_id));
     };
     let mut seen = vec![false; n as usize];
     for (run, shard) in runs.iter().zip(shards) {
-        let Some((k, of)) = *shard else {
+        let Some(Shard { k, n: of }) = *shard else {
             return refuse(format!("run {} is not a shard, the others are: merge shards alone", run.run_id));
         };
-        if of != n || k == 0 || k > n {
+        if of != n {
             return refuse(format!("shard {k}/{of} of run {} is not one of {n}", run.run_id));
         }
         if std::mem::replace(&mut seen[k as usize - 1], true) {
@@ -145,18 +167,8 @@ fn join(runs: &[Results], shards: &[Option<(u32, u32)>]) -> Result<Results, Merg
     if !missing.is_empty() {
         return refuse(format!("shards missing: {}; merge every shard of the run", missing.join(", ")));
     }
-    let records: Vec<MergedRun> = runs
-        .iter()
-        .zip(shards)
-        .map(|(r, s)| MergedRun {
-            tag: format!("shard-{}", s.map_or(0, |s| s.0)),
-            run_id: r.run_id.clone(),
-            created: r.created.clone(),
-            machine: r.machine.clone(),
-            git: r.git.clone(),
-            settings: r.settings.clone(),
-        })
-        .collect();
+    let records: Vec<MergedRun> =
+        runs.iter().zip(shards).map(|(r, s)| MergedRun::of(format!("shard-{}", s.map_or(0, |s| s.k)), r)).collect();
     let one_machine = runs.iter().all(|r| r.machine.hostname == first.machine.hostname);
     let mut cases: Vec<Case> = runs.iter().flat_map(|r| r.cases.iter().cloned()).collect();
     // The matrix's order: parts in the run's order, then each case's place in its part.
@@ -179,7 +191,7 @@ fn join(runs: &[Results], shards: &[Option<(u32, u32)>]) -> Result<Results, Merg
         shards: records,
         // Each shard's own phases stay in its file.
         phases_s: Default::default(),
-        ..first.clone()
+        ..first.clone_header()
     })
 }
 
@@ -192,6 +204,20 @@ fn parts_alike(a: &[Part], b: &[Part]) -> bool {
         ..p.clone()
     };
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| plain(x) == plain(y))
+}
+
+impl MergedRun {
+    /// The record of `run` under `tag`: its run, machine, git and settings.
+    fn of(tag: String, run: &Results) -> Self {
+        MergedRun {
+            tag,
+            run_id: run.run_id.clone(),
+            created: run.created.clone(),
+            machine: run.machine.clone(),
+            git: run.git.clone(),
+            settings: run.settings.clone(),
+        }
+    }
 }
 
 fn tagged(case: &Case, tag: &str) -> Case {
@@ -250,6 +276,15 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shards_parse_as_k_of_n() {
+        assert_eq!("2/3".parse::<Shard>(), Ok(Shard { k: 2, n: 3 }));
+        assert_eq!("1/1".parse::<Shard>().map(|s| s.to_string()), Ok("1/1".into()));
+        for bad in ["0/3", "4/3", "3", "a/b", "1/0", "1/20000", "-1/2"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+    }
 
     fn run(host: &str, structure: &str) -> Results {
         Results {

@@ -407,7 +407,7 @@ impl Results {
     }
 
     /// Everything but the cases, skipped cases and parts.
-    fn clone_header(&self) -> Results {
+    pub(crate) fn clone_header(&self) -> Results {
         Results {
             schema: self.schema.clone(),
             run_id: self.run_id.clone(),

@@ -225,3 +225,29 @@ pub fn primary_frame(accel: &dyn Traverse, scene: &Scene, size: u32) -> kernels:
         kernels::cpu::render::Workload::Primary,
     )
 }
+
+/// Every file below `root` that `keep` accepts, sorted, never entering a folder named in `skip`
+/// (build outputs, git's own files): what the repository checks (docs, module circles) read.
+pub fn files_under(
+    root: &std::path::Path,
+    skip: &[&str],
+    keep: impl Fn(&std::path::Path) -> bool,
+) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let mut folders = vec![root.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        let entries = std::fs::read_dir(&folder).unwrap_or_else(|e| panic!("{}: {e}", folder.display()));
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                if !skip.iter().any(|s| entry.file_name() == *s) {
+                    folders.push(path);
+                }
+            } else if keep(&path) {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}

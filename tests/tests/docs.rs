@@ -14,28 +14,13 @@ fn root() -> PathBuf {
 /// manifests, CI scripts (build outputs, git's own files, and this file, which names the patterns
 /// it looks for, left out).
 fn text_files() -> Vec<PathBuf> {
-    let mut files = Vec::new();
-    let mut folders = vec![root()];
-    while let Some(folder) = folders.pop() {
-        let entries = std::fs::read_dir(&folder).unwrap_or_else(|e| panic!("{}: {e}", folder.display()));
-        for entry in entries.flatten() {
-            let path = entry.path();
-            let name = entry.file_name().to_string_lossy().into_owned();
-            if path.is_dir() {
-                if !["target", ".git", "results"].contains(&name.as_str()) {
-                    folders.push(path);
-                }
-            } else if [".rs", ".wgsl", ".md", ".toml", ".sh", ".yml"].iter().any(|e| name.ends_with(e))
-                || path.parent().and_then(Path::file_name).is_some_and(|n| n == ".ci")
-            {
-                files.push(path);
-            }
-        }
-    }
     let this = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("docs.rs").canonicalize().ok();
-    files.retain(|f| f.canonicalize().ok() != this);
-    files.sort();
-    files
+    tests::files_under(&root(), &["target", ".git", "results"], |path| {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let text = [".rs", ".wgsl", ".md", ".toml", ".sh", ".yml"].iter().any(|e| name.ends_with(e))
+            || path.parent().and_then(Path::file_name).is_some_and(|n| n == ".ci");
+        text && path.canonicalize().ok() != this
+    })
 }
 
 /// The section numbers of a Markdown file's numbered headings (`## 4. Structures` → `4`,

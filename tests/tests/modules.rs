@@ -13,33 +13,26 @@ const CRATES: &[&str] = &["scenes", "structures", "kernels", "harness", "reports
 /// Every module of `crate_dir/src` by its path (`esvo::build`; the crate root is ""), with its file.
 fn modules(crate_dir: &Path) -> BTreeMap<String, PathBuf> {
     let src = crate_dir.join("src");
-    let mut found = BTreeMap::new();
-    let mut folders = vec![src.clone()];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap_or_else(|e| panic!("{}: {e}", folder.display())).flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                folders.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs") {
-                let relative = path.strip_prefix(&src).unwrap_or(&path).with_extension("");
-                let mut parts: Vec<String> = relative.iter().map(|p| p.to_string_lossy().into_owned()).collect();
-                if parts.last().is_some_and(|l| ["mod", "lib", "main"].contains(&l.as_str())) {
-                    parts.pop();
-                }
-                found.insert(parts.join("::"), path);
+    let files = tests::files_under(&src, &[], |path| path.extension().is_some_and(|e| e == "rs"));
+    files
+        .into_iter()
+        .map(|path| {
+            let relative = path.strip_prefix(&src).unwrap_or(&path).with_extension("");
+            let mut parts: Vec<String> = relative.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+            if parts.last().is_some_and(|l| ["mod", "lib", "main"].contains(&l.as_str())) {
+                parts.pop();
             }
-        }
-    }
-    found
+            (parts.join("::"), path)
+        })
+        .collect()
 }
 
-/// The code of a module file: comment lines dropped, and its unit-test module (`#[cfg(test)]`
+/// The code of a module's text: comment lines dropped, and its unit-test module (`#[cfg(test)]`
 /// followed by `mod tests`) cut off, since tests may use what they test from anywhere.
-fn code(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
+fn code(text: &str) -> String {
     let text = match text.find("#[cfg(test)]\nmod tests") {
         Some(at) => &text[..at],
-        None => &text,
+        None => text,
     };
     text.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n")
 }
@@ -123,7 +116,10 @@ fn circle(from: &str, graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<
 
 fn graph_of(crate_name: &str) -> BTreeMap<String, BTreeSet<String>> {
     let modules = modules(&Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(crate_name));
-    modules.iter().map(|(me, path)| (me.clone(), uses(me, &code(path), &modules))).collect()
+    modules
+        .iter()
+        .map(|(me, path)| (me.clone(), uses(me, &code(&std::fs::read_to_string(path).unwrap_or_default()), &modules)))
+        .collect()
 }
 
 #[test]
@@ -163,15 +159,6 @@ fn the_scan_finds_a_circle_and_ignores_comments_and_submodules() {
         [("a", a), ("b", b), ("a::inner", inner)].into_iter().map(|(k, v)| (k.to_string(), v)).collect();
     assert_eq!(circle("b", &graph), Some(vec!["b".into(), "a::inner".into(), "b".into()]));
     assert_eq!(circle("a", &graph), None, "a uses b, and b uses a's submodule, not a");
-    let commented = code_of_text("// use crate::b;\nfn f() {}\n#[cfg(test)]\nmod tests { use crate::b; }\n");
+    let commented = code("// use crate::b;\nfn f() {}\n#[cfg(test)]\nmod tests { use crate::b; }\n");
     assert!(!commented.contains("crate::b"), "{commented}");
-}
-
-/// [`code`] of a text rather than a file.
-fn code_of_text(text: &str) -> String {
-    let path = std::env::temp_dir().join(format!("accel-bench-modules-{}.rs", std::process::id()));
-    std::fs::write(&path, text).unwrap_or_else(|e| panic!("{e}"));
-    let out = code(&path);
-    let _ = std::fs::remove_file(&path);
-    out
 }
