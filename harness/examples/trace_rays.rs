@@ -17,18 +17,40 @@ use kernels::Accel;
 use scenes::Camera;
 use structures::{BuildInput, Params};
 
-/// Traces every pixel's camera ray; returns (hits, checksum over hit triangles and `t` bits).
+/// Traces every pixel's camera ray; returns (hits, checksum over hit triangles and `t` bits). A
+/// structure that casts packets (`Traverse::packet_width` above 1: `embree.packet`, a grid's
+/// `packet=frustum`) gets each 8 × 8 tile's rays at once, as the renderer gives them; the
+/// checksum runs over pixels in row order either way, so it compares across the two.
 #[inline(never)]
 fn trace_all(accel: &dyn Accel, camera: &Camera, size: u32) -> (u64, u64) {
-    let mut hits = 0u64;
-    let mut sum = 0u64;
-    for y in 0..size {
-        for x in 0..size {
-            if let Some(h) = accel.intersect(&camera.ray(x, y), 0.0, f32::INFINITY) {
-                hits += 1;
-                sum = sum.wrapping_mul(31).wrapping_add(h.prim ^ u64::from(h.t.to_bits()));
+    let mut found = vec![None; (size * size) as usize];
+    if accel.packet_width() > 1 {
+        const TILE: u32 = kernels::cpu::render::TILE;
+        for ty in (0..size).step_by(TILE as usize) {
+            for tx in (0..size).step_by(TILE as usize) {
+                let pixels: Vec<(u32, u32)> = (ty..(ty + TILE).min(size))
+                    .flat_map(|y| (tx..(tx + TILE).min(size)).map(move |x| (x, y)))
+                    .collect();
+                let rays: Vec<_> = pixels.iter().map(|&(x, y)| camera.ray(x, y)).collect();
+                let mut hits = vec![None; rays.len()];
+                accel.intersect_packet(&rays, &vec![0.0; rays.len()], &mut hits);
+                for (&(x, y), hit) in pixels.iter().zip(hits) {
+                    found[(y * size + x) as usize] = hit;
+                }
             }
         }
+    } else {
+        for y in 0..size {
+            for x in 0..size {
+                found[(y * size + x) as usize] = accel.intersect(&camera.ray(x, y), 0.0, f32::INFINITY);
+            }
+        }
+    }
+    let mut hits = 0u64;
+    let mut sum = 0u64;
+    for h in found.into_iter().flatten() {
+        hits += 1;
+        sum = sum.wrapping_mul(31).wrapping_add(h.prim ^ u64::from(h.t.to_bits()));
     }
     (hits, sum)
 }

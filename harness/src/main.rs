@@ -146,7 +146,7 @@ fn list(what: ListWhat) {
         println!("  org-fig2   seed 002 Fig. 2: rg vs org on dragon-11k…dragon and dragon@sub1 (3.5 M)");
         println!("  org-table1 seed 002 Table 1: org, ug, rg, rg2, bvh on every built-in scene at 500×500");
         println!(
-            "  org-fast   org (paper, its scalar form, copied blocks, and fast) beside bvh, bvh4 (SIMD, scalar and 8-wide) and embree (fast and robust) on bunny, dragon-48k, city, terrain, dragon at 1024×1024"
+            "  org-fast   org (paper, its scalar form, copied blocks, frustum packets, and fast) beside bvh, bvh4 (SIMD, scalar and 8-wide) and embree (fast, robust and 16-ray packets) on bunny, dragon-48k, city, terrain, dragon at 1024×1024"
         );
         println!(
             "  svdag-tables seed 001 Tables 1–3, Fig. 13: svo, esvo, svdag on bunny, dragon, menger, city, mandelbulb"

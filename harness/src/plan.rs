@@ -101,10 +101,13 @@ impl Preset {
             // speed-up), and Embree in its watertight mode, the like-for-like reference.
             // ORG's cells copied into blocks (`blocks`), the layout of the wide BVH's leaves: what
             // reading triangles through references costs it, against what the copies cost in memory.
+            // ORG casting each tile's 64 primary rays as one frustum packet (`packets`), beside
+            // Embree's 16-ray packets (`packet16`).
             (Preset::OrgFast, "org") => vec![
                 (Vec::new(), None),
                 (vec!["simd=scalar".into()], Some("scalar".into())),
                 (vec!["org.layout=blocks".into()], Some("blocks".into())),
+                (vec!["org.packet=frustum".into()], Some("packets".into())),
                 (ORG_FAST.iter().map(|p| p.to_string()).collect(), Some("fast".into())),
             ],
             // The wide BVH at both widths: 4-wide (SSE) and its scalar form, and 8-wide (AVX2),
@@ -115,7 +118,11 @@ impl Preset {
                 (vec!["bvh4.width=8".into()], Some("8-wide".into())),
             ],
             (Preset::OrgFast, "embree") => {
-                vec![(Vec::new(), None), (vec!["embree.robust=on".into()], Some("robust".into()))]
+                vec![
+                    (Vec::new(), None),
+                    (vec!["embree.robust=on".into()], Some("robust".into())),
+                    (vec!["embree.packet=16".into()], Some("packet16".into())),
+                ]
             }
             // Every level to 2^14, L = 14 with LOD at a pixel, and L = 11 split into ~100 blocks
             // (what the split costs a ray, beside the same level in one block).

@@ -90,7 +90,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "ug",
         family: "triangle",
         summary: "uniform grid, Eq. 1 (ug.lambda, default 5)",
-        params: &["ug.lambda", "ug.layout", "simd"],
+        params: &["ug.lambda", "ug.layout", "ug.packet", "simd"],
         check: |p| grid_check("ug", p),
         build: |input| build_grid("ug", input),
         available: always,
@@ -99,7 +99,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "rg",
         family: "triangle",
         summary: "recursive grid, Jevans & Wyvill (rg.lambda 1, rg.gamma 16, rg.max_depth 3)",
-        params: &["rg.lambda", "rg.gamma", "rg.max_depth", "rg.layout", "simd"],
+        params: &["rg.lambda", "rg.gamma", "rg.max_depth", "rg.layout", "rg.packet", "simd"],
         check: |p| grid_check("rg", p),
         build: |input| build_grid("rg", input),
         available: always,
@@ -108,7 +108,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "rg2",
         family: "triangle",
         summary: "two-level grid, Ize et al.: (8N)^0.6 top cells, 8·N_2 per cell",
-        params: &["rg2.layout", "simd"],
+        params: &["rg2.layout", "rg2.packet", "simd"],
         check: |p| grid_check("rg2", p),
         build: |input| build_grid("rg2", input),
         available: always,
@@ -136,7 +136,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
     StructureEntry {
         name: "org",
         family: "triangle",
-        summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8, org.leaf_lambda = org.lambda, org.beta level|counted, org.gamma_test reduced|unreduced, org.cell_test bbox|sat, org.layout refs|blocks)",
+        summary: "optimized recursive grid, Li & Wang (org.lambda 1, org.alpha 2, org.gamma 16, org.max_depth 8, org.leaf_lambda = org.lambda, org.beta level|counted, org.gamma_test reduced|unreduced, org.cell_test bbox|sat, org.layout refs|blocks, org.packet off|frustum)",
         params: &[
             "org.lambda",
             "org.leaf_lambda",
@@ -147,6 +147,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
             "org.gamma_test",
             "org.cell_test",
             "org.layout",
+            "org.packet",
             "simd",
         ],
         check: |p| grid_check("org", p),
@@ -259,6 +260,7 @@ fn build_bvh(input: &BuildInput) -> Result<Box<dyn Accel>, BuildError> {
 /// Every grid reads its kind's parameters and `simd` (the triangle tests' lanes).
 fn grid_check(name: &str, params: &Params) -> Result<(), BuildError> {
     structures::grid::GridKind::from_params(name, params)?;
+    structures::grid::Packets::from_params(name, params)?;
     structures::simd::SimdChoice::from_params(params)?.resolve(&structures::grid::SUPPORTED).map(drop)
 }
 

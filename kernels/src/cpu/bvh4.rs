@@ -18,7 +18,7 @@ use structures::bvh4::layout::{NO_PRIM, WideNode, is_leaf, leaf_blocks};
 use structures::bvh4::{Bvh4, Bvh8, WideBvh};
 use structures::simd::Isa;
 
-use super::bvh::{CULL_MARGIN, pop_nearer, tie_limit};
+use super::bvh::{CULL_MARGIN, pop_nearer};
 use super::slab;
 use super::stack::Stack;
 use super::triangle::nearest_hit;
@@ -289,25 +289,15 @@ fn walk<const W: usize, B: BoxLanes<W>, T: TriangleLanes, S: Stats>(
             }
         } else {
             let (first, count) = leaf_blocks(cur);
-            for block in &bvh.blocks[first..first + count] {
-                if S::COUNTING {
-                    for _ in 0..block.len() {
-                        stats.prim_test();
-                    }
-                }
-                // Up to the best hit inclusive once there is one: an equal `t` with a smaller
-                // triangle index still wins (the tie rule, as the reference's).
-                let (mut mask, t) = tris.block(block, t_min, tie_limit(best_t, best_prim));
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let prim = block.prim[lane];
-                    if t[lane] < best_t || (t[lane] == best_t && prim < best_prim) {
-                        best_t = t[lane];
-                        best_prim = prim;
-                    }
+            let blocks = &bvh.blocks[first..first + count];
+            if S::COUNTING {
+                for _ in blocks.iter().flat_map(|b| 0..b.len()) {
+                    stats.prim_test();
                 }
             }
+            // Up to the best hit inclusive once there is one: an equal `t` with a smaller
+            // triangle index still wins (the tie rule, as the reference's).
+            triangle4::nearest_in_blocks(tris, blocks, t_min, &mut best_t, &mut best_prim);
             if best_prim != NO_PRIM {
                 cull_t = best_t * CULL_MARGIN;
             }

@@ -38,19 +38,25 @@
 //!
 //! **Triangle tests.** A cell's list is tested four triangles at a time in SSE lanes where the
 //! CPU has them (`simd=auto|sse4`; `cpu::triangle4`, bit for bit the scalar test per lane, the
-//! first of equally near triangles winning as in the scalar loop), or one at a time
+//! smaller index winning among equally near triangles as in the scalar loop), or one at a time
 //! (`simd=scalar`, the oracle): the same hits either way.
+//!
+//! **Packets.** With `<kind>.packet=frustum` the renderer's tiles of 64 primary rays go through
+//! `grid/packet.rs` (frustum packets slice by slice, after Wald et al.'s coherent grid traversal): the
+//! same hits as this walk, which stays the oracle and takes the packets that cannot go together.
 
 use scenes::{Camera, Ray};
-use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, SUBGRID_BIT};
+use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, Packets, SUBGRID_BIT};
 use structures::simd::Resolved;
 
 use super::slab;
 use super::stack::Stack;
 use super::triangle::nearest_hit;
-use super::triangle4::{self, LaneKernel, TriangleLanes};
+use super::triangle4::{self, LaneKernel, PacketKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
+
+mod packet;
 
 /// The deepest hierarchy the kernel follows: seed 002's MAXDEPTH = 8 (docs/design.md §4.5), the cap the
 /// builder enforces.
@@ -462,6 +468,13 @@ impl LaneKernel for Grid {
     }
 }
 
+impl PacketKernel for Grid {
+    #[inline(always)]
+    fn walk_packet<T: TriangleLanes>(&self, rays: &[Ray], tests: &[T], t_min: &[f32], hits: &mut [Option<Hit>]) {
+        packet::trace(self, rays, tests, t_min, hits);
+    }
+}
+
 impl Traverse for Grid {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         triangle4::run_on(self, ray, t_min, t_max, &mut NoStats)
@@ -473,5 +486,19 @@ impl Traverse for Grid {
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
         Some(crate::gpu::grid::program(self))
+    }
+
+    fn packet_width(&self) -> usize {
+        match self.packets {
+            Packets::Off => 1,
+            Packets::Frustum => triangle4::PACKET,
+        }
+    }
+
+    fn intersect_packet(&self, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
+        match self.packets {
+            Packets::Off => crate::intersect_each(self, rays, t_min, hits),
+            Packets::Frustum => triangle4::run_packet_on(self, rays, t_min, hits),
+        }
     }
 }

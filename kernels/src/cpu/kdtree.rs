@@ -20,8 +20,8 @@
 //! crossings, a sliver the rounded intervals can lose, where an edge or a vertex may be hit).
 //!
 //! A leaf's triangles are tested four at a time in SSE lanes where the CPU has them
-//! (`simd=auto|sse4`; `cpu::triangle4`, bit for bit the scalar test per lane, the first of
-//! equally near triangles winning as in the scalar loop), or one at a time (`simd=scalar`).
+//! (`simd=auto|sse4`; `cpu::triangle4`, bit for bit the scalar test per lane, the smaller index
+//! winning among equally near triangles as in the scalar loop), or one at a time (`simd=scalar`).
 
 use scenes::{Camera, Ray};
 use structures::kdtree::{KdNode, KdTraversal, KdTree, MAX_DEPTH};
@@ -57,7 +57,7 @@ fn crossing(n: &KdNode, origin: &[f32; 3], dir: &[f32; 3]) -> Crossing {
 }
 
 /// Tests a leaf's triangles with `tris` (four at a time, or one at a time for `simd=scalar`),
-/// keeping the nearest hit (`t`, triangle) in `best`: the first of equally near ones in the list.
+/// keeping the nearest hit (`t`, triangle) in `best`: the smallest index of equally near ones.
 #[inline(always)]
 fn test_leaf<T: TriangleLanes, S: Stats>(
     tree: &KdTree,

@@ -235,6 +235,12 @@ mod sse {
         pub fn ne(self, other: Self) -> M32x4 {
             M32x4(unsafe { _mm_cmpneq_ps(self.0, other.0) })
         }
+
+        /// `if mask { yes } else { no }` per lane, bits unchanged.
+        #[inline(always)]
+        pub fn select(mask: M32x4, yes: Self, no: Self) -> Self {
+            Self(unsafe { _mm_or_ps(_mm_and_ps(mask.0, yes.0), _mm_andnot_ps(mask.0, no.0)) })
+        }
     }
 
     impl M32x4 {
@@ -292,12 +298,15 @@ mod sse {
                     let bit = |m: M32x4, s: bool| m.bits() == if s { 0b1111 } else { 0 };
                     assert!(bit(va.lt(vb), a < b) && bit(va.le(vb), a <= b) && bit(va.gt(vb), a > b), "{a} {b}");
                     assert!(bit(va.eq(vb), a == b) && bit(va.ne(vb), a != b) && bit(!va.eq(vb), a != b), "{a} {b}");
+                    assert!(same(F32x4::select(va.lt(vb), va, vb), if a < b { a } else { b }), "select {a} {b}");
                 }
             }
             let v = F32x4::load(&[1.0, 2.0, 3.0, 4.0]);
             assert_eq!(v.lt(F32x4::splat(2.5)).bits(), 0b0011, "lane 0 is the lowest bit");
             assert_eq!((v.gt(F32x4::splat(1.5)) & v.lt(F32x4::splat(3.5))).bits(), 0b0110);
             assert_eq!((v.lt(F32x4::splat(1.5)) | v.gt(F32x4::splat(3.5))).bits(), 0b1001);
+            let picked = F32x4::select(v.gt(F32x4::splat(2.5)), v, F32x4::splat(-0.0)).to_array();
+            assert_eq!(picked.map(f32::to_bits), [-0.0, -0.0, 3.0, 4.0].map(f32::to_bits), "select per lane");
         }
 
         #[test]

@@ -149,7 +149,7 @@ fn trace<S: Stats>(tree: &TriOctree, ray: &Ray, t_min: f32, t_max: f32, stats: &
 }
 
 /// The parametric walk, testing the triangles of each leaf it reaches with `tris`: those not in
-/// the mailbox, in list order, four at a time (the first of equal `t` wins, as one at a time).
+/// the mailbox, in list order, four at a time (the smaller index wins an equal `t`, as one at a time).
 #[inline(always)]
 fn walk<T: TriangleLanes, S: Stats>(
     tree: &TriOctree,

@@ -11,7 +11,7 @@ use scenes::{Camera, Ray, Scene};
 use crate::{Counters, Traverse};
 
 pub const TILE: u32 = 8;
-const TILE_PIXELS: usize = (TILE * TILE) as usize;
+pub(crate) const TILE_PIXELS: usize = (TILE * TILE) as usize;
 
 /// What each pixel casts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,14 +8,16 @@
 //!   so every lane's answer is the scalar test's bit for bit; a lane with an edge function
 //!   exactly zero is recomputed by the scalar test, whose f64 fallback decides it.
 //!
-//! A reference list is tested in its order, four at a time against the best hit so far, and the
-//! hits of a quadruple taken in lane order with a strict `<`: the first of equally near triangles
-//! wins, as in the scalar loop, so lists give the scalar kernels' hits exactly.
+//! A reference list is tested in its order, four at a time against the best hit so far, up to
+//! that hit inclusive, and the hits of a quadruple taken under the tie rule (an equal `t` wins
+//! with a smaller triangle index, [`super::bvh::tie_limit`]): the hit is the least `(t, index)`
+//! whatever order lists, blocks or cells are tested in, so lanes, scalar loops and packets agree.
 
 use scenes::{Ray, Triangle};
 use structures::bvh4::layout::{Tri4, WIDTH};
 use structures::simd::{Isa, Resolved};
 
+use super::bvh::tie_limit;
 use super::triangle::ShearedRay;
 use crate::{Hit, Stats};
 
@@ -58,6 +60,50 @@ pub(crate) fn run_on<K: LaneKernel, S: Stats>(
     }
 }
 
+/// Rays a packet traversal takes at once: a render tile's.
+pub(crate) const PACKET: usize = crate::cpu::render::TILE_PIXELS;
+
+/// A structure with a packet traversal written once over any [`TriangleLanes`]: [`run_packet_on`]
+/// runs it with one triangle test per ray, of the structure's instruction set.
+pub(crate) trait PacketKernel {
+    /// The nearest hits of `rays` (at most [`PACKET`], each from its own `t_min`, to ∞) into
+    /// `hits`, ray `i`'s triangles tested by `tests[i]`.
+    fn walk_packet<T: TriangleLanes>(&self, rays: &[Ray], tests: &[T], t_min: &[f32], hits: &mut [Option<Hit>]);
+}
+
+/// Runs `kernel`'s packet walk over `rays`, [`PACKET`] at a time, with the triangle tests of the
+/// instruction set it was resolved to (see [`run_on`]).
+#[allow(unsafe_code)]
+pub(crate) fn run_packet_on<K: LaneKernel + PacketKernel>(
+    kernel: &K,
+    rays: &[Ray],
+    t_min: &[f32],
+    hits: &mut [Option<Hit>],
+) {
+    for ((rays, t_min), hits) in rays.chunks(PACKET).zip(t_min.chunks(PACKET)).zip(hits.chunks_mut(PACKET)) {
+        match kernel.isa().isa() {
+            // SAFETY: as in `run_on`: a `Resolved` holds `Sse4` only where this CPU has SSE4.1.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse4 => unsafe { sse::packet_sse4(kernel, rays, t_min, hits) },
+            _ => packet_with(kernel, rays, t_min, hits, Scalar::new),
+        }
+    }
+}
+
+/// One packet of `rays` (at most [`PACKET`]) through `kernel`, each ray's tests made by `test`.
+#[inline(always)]
+fn packet_with<K: PacketKernel, T: TriangleLanes>(
+    kernel: &K,
+    rays: &[Ray],
+    t_min: &[f32],
+    hits: &mut [Option<Hit>],
+    test: impl Fn(&Ray) -> T,
+) {
+    // Collected in place (an array built by value would be copied whole: 8.7 KB of SSE tests).
+    let tests: Vec<T> = rays.iter().map(test).collect();
+    kernel.walk_packet(rays, &tests, t_min, hits);
+}
+
 /// The tests of a kernel's triangles, four lanes at a time.
 pub(crate) trait TriangleLanes {
     /// Triangles of `block` hit within `(t_min, t_max)`: one bit per lane, and each lane's `t`.
@@ -70,30 +116,28 @@ pub(crate) trait TriangleLanes {
     /// The scalar test of one triangle: what every lane computes, without the lanes.
     fn one(&self, tri: &Triangle, t_min: f32, t_max: f32) -> Option<f32>;
 
-    /// The nearest of triangles `ids` of `tris` hit within `(t_min, best_t)`, in list order (the
-    /// first of equal `t` wins): updates `best_t` and `best_prim`, and says whether it did. A list
-    /// of one triangle (many grid cells and kd-tree leaves) takes the scalar test, which is what
-    /// its lane would compute, without gathering four.
+    /// The nearest of triangles `ids` of `tris` hit within `(t_min, best_t)`, or at `best_t` with
+    /// an index below `best_prim` (the tie rule): updates `best_t` and `best_prim`, and says
+    /// whether it did. A list of one triangle (many grid cells and kd-tree leaves) takes the
+    /// scalar test, which is what its lane would compute, without gathering four.
     #[inline(always)]
     fn nearest(&self, tris: &[Triangle], ids: &[u32], t_min: f32, best_t: &mut f32, best_prim: &mut u32) -> bool {
         if let &[id] = ids {
-            let Some(t) = self.one(&tris[id as usize], t_min, *best_t) else { return false };
-            *best_t = t;
-            *best_prim = id;
-            return true;
+            let Some(t) = self.one(&tris[id as usize], t_min, tie_limit(*best_t, *best_prim)) else { return false };
+            return take_if_nearer(t, id, best_t, best_prim);
         }
         let mut found = false;
         for quad in ids.chunks(WIDTH) {
-            let (mask, t) = self.listed(tris, quad, t_min, *best_t);
+            let (mask, t) = self.listed(tris, quad, t_min, tie_limit(*best_t, *best_prim));
             found |= take_nearest(mask, t, |lane| quad[lane], best_t, best_prim);
         }
         found
     }
 }
 
-/// The nearest triangle of `blocks` (copied lists, in list order) hit within `(t_min, best_t)`,
-/// as [`TriangleLanes::nearest`] finds it in the list they were copied from: each block against
-/// the best hit so far, its lanes taken in order with a strict `<` (the first of equal `t` wins).
+/// The nearest triangle of `blocks` (copied lists) hit within `(t_min, best_t)`, or at `best_t`
+/// with a smaller index, as [`TriangleLanes::nearest`] finds it in the list they were copied
+/// from: each block against the best hit so far, under the tie rule.
 #[inline(always)]
 pub(crate) fn nearest_in_blocks<T: TriangleLanes>(
     tris: &T,
@@ -104,14 +148,14 @@ pub(crate) fn nearest_in_blocks<T: TriangleLanes>(
 ) -> bool {
     let mut found = false;
     for block in blocks {
-        let (mask, t) = tris.block(block, t_min, *best_t);
+        let (mask, t) = tris.block(block, t_min, tie_limit(*best_t, *best_prim));
         found |= take_nearest(mask, t, |lane| block.prim[lane], best_t, best_prim);
     }
     found
 }
 
-/// The hit lanes of `mask` taken in lane order against the best hit so far, with a strict `<`
-/// (the first of equal `t` wins, as in the scalar loop); `prim(lane)` names a lane's triangle.
+/// The hit lanes of `mask` taken against the best hit so far under the tie rule;
+/// `prim(lane)` names a lane's triangle.
 #[inline(always)]
 fn take_nearest(
     mut mask: u32,
@@ -124,13 +168,21 @@ fn take_nearest(
     while mask != 0 {
         let lane = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        if t[lane] < *best_t {
-            *best_t = t[lane];
-            *best_prim = prim(lane);
-            found = true;
-        }
+        found |= take_if_nearer(t[lane], prim(lane), best_t, best_prim);
     }
     found
+}
+
+/// Takes the hit `(t, prim)` if it is nearer than the best so far, or as near with a smaller
+/// triangle index (the tie rule): the least `(t, index)` wins, in any order of testing.
+#[inline(always)]
+fn take_if_nearer(t: f32, prim: u32, best_t: &mut f32, best_prim: &mut u32) -> bool {
+    let nearer = t < *best_t || (t == *best_t && prim < *best_prim);
+    if nearer {
+        *best_t = t;
+        *best_prim = prim;
+    }
+    nearer
 }
 
 /// The shared scalar test, one lane at a time.
@@ -158,15 +210,13 @@ impl TriangleLanes for Scalar {
         lane_by_lane(ids.len(), |lane| self.0.intersect(&tris[ids[lane] as usize], t_min, t_max))
     }
 
-    /// The scalar loop itself: each triangle tested against the best hit so far.
+    /// The scalar loop itself: each triangle tested against the best hit so far (tie rule).
     #[inline(always)]
     fn nearest(&self, tris: &[Triangle], ids: &[u32], t_min: f32, best_t: &mut f32, best_prim: &mut u32) -> bool {
         let mut found = false;
         for &id in ids {
-            if let Some(t) = self.0.intersect(&tris[id as usize], t_min, *best_t) {
-                *best_t = t;
-                *best_prim = id;
-                found = true;
+            if let Some(t) = self.0.intersect(&tris[id as usize], t_min, tie_limit(*best_t, *best_prim)) {
+                found |= take_if_nearer(t, id, best_t, best_prim);
             }
         }
         found
@@ -312,6 +362,13 @@ mod sse {
         stats: &mut S,
     ) -> Option<Hit> {
         kernel.walk(ray, &Sse::new(ray), t_min, t_max, stats)
+    }
+
+    /// `kernel`'s packet walk with SSE4.1 enabled throughout, each ray's triangles tested four
+    /// at a time.
+    #[target_feature(enable = "sse4.1")]
+    pub(super) fn packet_sse4<K: PacketKernel>(kernel: &K, rays: &[Ray], t_min: &[f32], hits: &mut [Option<Hit>]) {
+        packet_with(kernel, rays, t_min, hits, Sse::new);
     }
 
     /// Unreachable stand-in for a row past a triangle's nine floats (`at` is at most 5).

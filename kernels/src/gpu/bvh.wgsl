@@ -52,15 +52,9 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
         if (n.count > 0u) {
             for (var k = n.first; k < n.first + n.count; k++) {
                 let prim = refs(k);
-                // The tie rule (cpu::bvh::tie_limit): past the first hit, test up to one ulp
-                // beyond it, and an equal `t` wins with a smaller triangle index. A miss returns
-                // the limit itself, which neither condition accepts.
-                let limit = select(best_t, bitcast<f32>(bitcast<u32>(best_t) + 1u), best_prim != NO_PRIM);
-                let t = intersect_triangle(sheared, prim, t_min, limit);
-                if (t < limit && (t < best_t || prim < best_prim)) {
-                    best_t = t;
-                    cull_t = t * CULL_MARGIN;
-                    best_prim = prim;
+                // The tie rule: an equal `t` wins with a smaller triangle index.
+                if (take_nearer(sheared, prim, t_min, &best_t, &best_prim)) {
+                    cull_t = best_t * CULL_MARGIN;
                 }
             }
         } else {

@@ -262,11 +262,8 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
             }
             for (var k = begin; k < end; k++) {
                 let prim = refs(k);
-                let t = intersect_triangle(sheared, prim, t_min, best_t);
-                if (t < best_t) {
-                    best_t = t;
-                    cull_t = cull_bound(t);
-                    best_prim = prim;
+                if (take_nearer(sheared, prim, t_min, &best_t, &best_prim)) {
+                    cull_t = cull_bound(best_t);
                 }
             }
         }

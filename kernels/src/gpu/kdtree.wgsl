@@ -36,11 +36,7 @@ fn kd_test_leaf(sheared: ShearedRay, flags: u32, data: u32, t_min: f32, best_t: 
     let count = flags >> 2u;
     for (var k = data; k < data + count; k++) {
         let prim = refs(k);
-        let t = intersect_triangle(sheared, prim, t_min, *best_t);
-        if (t < *best_t) {
-            *best_t = t;
-            *best_prim = prim;
-        }
+        take_nearer(sheared, prim, t_min, best_t, best_prim);
     }
 }
 

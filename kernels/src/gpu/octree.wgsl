@@ -143,11 +143,7 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
                     }
                     mailbox[prim % OT_MAILBOX] = prim;
                 }
-                let t = intersect_triangle(sheared, prim, t_min, best_t);
-                if (t < best_t) {
-                    best_t = t;
-                    best_prim = prim;
-                }
+                take_nearer(sheared, prim, t_min, &best_t, &best_prim);
             }
             leaf = NO_PRIM;
         }

@@ -93,3 +93,18 @@ fn triangle_result(best_t: f32, best_prim: u32) -> TraceResult {
     }
     return TraceResult(true, best_t, best_prim, 0u);
 }
+
+// Tests triangle `prim` and takes its hit when nearer than the best so far, or as near with a
+// smaller triangle index (the tie rule, cpu::bvh::tie_limit): past the first hit it tests up to one
+// ulp beyond it, so the least (t, index) wins whatever order the triangles are tested in. A miss
+// returns the limit itself, which neither condition accepts.
+fn take_nearer(r: ShearedRay, prim: u32, t_min: f32, best_t: ptr<function, f32>, best_prim: ptr<function, u32>) -> bool {
+    let limit = select(*best_t, bitcast<f32>(bitcast<u32>(*best_t) + 1u), *best_prim != NO_PRIM);
+    let t = intersect_triangle(r, prim, t_min, limit);
+    if (t < limit && (t < *best_t || prim < *best_prim)) {
+        *best_t = t;
+        *best_prim = prim;
+        return true;
+    }
+    return false;
+}

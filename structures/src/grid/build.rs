@@ -12,7 +12,7 @@ use std::time::Instant;
 use super::layout::{GridHeader, SUBGRID_BIT};
 use super::level::{Footprint, LevelGrid, build_level, cell_range, header, range_cells};
 use super::resolution::{algorithm2, cells, eq1};
-use super::{BetaRule, BuildPhases, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats};
+use super::{BetaRule, BuildPhases, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats, Packets};
 use crate::ms_since;
 use crate::simd::SimdChoice;
 use crate::{BuildError, BuildInput};
@@ -166,6 +166,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
         CellLayout::Refs,
         &[("refs", CellLayout::Refs), ("blocks", CellLayout::Blocks)],
     )?;
+    let packets = Packets::from_params(kind.name(), input.params)?;
     let tris = &input.triangles;
     if tris.len() >= SUBGRID_BIT as usize {
         return Err(BuildError::Limit {
@@ -179,6 +180,7 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     drop(nodes);
     let mut grid = Grid::from_layout(kind, headers, cells, refs, input.triangles.clone());
     grid.isa = isa;
+    grid.packets = packets;
     grid.levels = levels;
     grid.budget_stop = budget_stop;
     if layout == CellLayout::Blocks {

@@ -156,6 +156,29 @@ pub enum CellLayout {
     Blocks,
 }
 
+/// How the CPU kernel casts a render tile's primary rays (`<kind>.packet`; every kind the same).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Packets {
+    /// One ray at a time, each by its own DDA (the default, and the oracle).
+    Off,
+    /// A tile's 64 rays together, slice by slice through each grid along the axis they all
+    /// travel (coherent grid traversal, Wald et al. 2006; `kernels::cpu::grid` `packet`): the
+    /// same hits, the traversal shared by the tile.
+    Frustum,
+}
+
+impl Packets {
+    /// The key of grid kind `kind`'s packet parameter.
+    pub fn key(kind: &str) -> String {
+        format!("{kind}.packet")
+    }
+
+    pub fn from_params(kind: &str, params: &crate::Params) -> Result<Self, crate::BuildError> {
+        params.choice(&Self::key(kind), Packets::Off, &[("off", Packets::Off), ("frustum", Packets::Frustum)])
+    }
+}
+
 /// What one level of the hierarchy holds, for the report (seed 002 §2's per-level accounting).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct LevelStats {
@@ -192,6 +215,8 @@ pub struct Grid {
     pub isa: Resolved,
     /// How the CPU kernel reads a cell's triangles.
     pub layout: CellLayout,
+    /// How the CPU kernel casts a tile's primary rays.
+    pub packets: Packets,
     /// [`CellLayout::Blocks`]: every cell's triangles in blocks, cell after cell; empty otherwise.
     pub blocks: Vec<Tri4>,
     /// [`CellLayout::Blocks`]: parallel to `cells`, the first block of each cell, so cell `c` of a
@@ -248,6 +273,7 @@ impl Grid {
             budget_stop: None,
             isa: Resolved::SCALAR,
             layout: CellLayout::Refs,
+            packets: Packets::Off,
             blocks: Vec::new(),
             cell_blocks: Vec::new(),
             phases: BuildPhases::default(),
@@ -341,6 +367,7 @@ impl Structure for Grid {
             "budget_stop": self.budget_stop,
             "simd": self.isa.name(),
             "layout": self.layout,
+            "packet": self.packets,
             "phases_ms": self.phases,
         })
     }
