@@ -116,6 +116,16 @@ pub(crate) trait TriangleLanes {
     /// The scalar test of one triangle: what every lane computes, without the lanes.
     fn one(&self, tri: &Triangle, t_min: f32, t_max: f32) -> Option<f32>;
 
+    /// Triangles read once for the tests of several rays ([`TriangleLanes::quad`]).
+    type Quad;
+
+    /// Triangles `ids` (one to four) of `tris`, read for [`TriangleLanes::quad`].
+    fn load_quad(tris: &[Triangle], ids: &[u32]) -> Self::Quad;
+
+    /// [`TriangleLanes::listed`] on triangles `ids` of `tris` already read into `quad`
+    /// ([`TriangleLanes::load_quad`]): the same bits and `t`s.
+    fn quad(&self, quad: &Self::Quad, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
+
     /// The nearest of triangles `ids` of `tris` hit within `(t_min, best_t)`, or at `best_t` with
     /// an index below `best_prim` (the tie rule): updates `best_t` and `best_prim`, and says
     /// whether it did. A list of one triangle (many grid cells and kd-tree leaves) takes the
@@ -132,6 +142,55 @@ pub(crate) trait TriangleLanes {
             found |= take_nearest(mask, t, |lane| quad[lane], best_t, best_prim);
         }
         found
+    }
+}
+
+/// [`TriangleLanes::nearest`] of triangles `ids` for each ray of `rays` (bit `i`: ray `i`, tested
+/// by `tests[i]` from `t_min[i]` against `best_t[i]`, `best_prim[i]`), each quadruple read once
+/// for all of them: per ray the same tests in the same order, so the same hits. Returns the rays
+/// whose best hit changed.
+#[inline(always)]
+pub(crate) fn nearest_for_each<T: TriangleLanes>(
+    tests: &[T],
+    rays: u64,
+    tris: &[Triangle],
+    ids: &[u32],
+    t_min: &[f32],
+    best_t: &mut [f32],
+    best_prim: &mut [u32],
+) -> u64 {
+    let mut found = 0u64;
+    if rays & (rays - 1) == 0 || ids.len() == 1 {
+        // One ray, or one triangle (the scalar test): nothing to share.
+        for i in Bits(rays) {
+            found |= u64::from(tests[i].nearest(tris, ids, t_min[i], &mut best_t[i], &mut best_prim[i])) << i;
+        }
+        return found;
+    }
+    for quad in ids.chunks(WIDTH) {
+        let loaded = T::load_quad(tris, quad);
+        for i in Bits(rays) {
+            let (mask, t) = tests[i].quad(&loaded, tris, quad, t_min[i], tie_limit(best_t[i], best_prim[i]));
+            let took = take_nearest(mask, t, |lane| quad[lane], &mut best_t[i], &mut best_prim[i]);
+            found |= u64::from(took) << i;
+        }
+    }
+    found
+}
+
+/// The set bits of a `u64`, lowest first.
+pub(crate) struct Bits(pub u64);
+
+impl Iterator for Bits {
+    type Item = usize;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        (self.0 != 0).then(|| {
+            let i = self.0.trailing_zeros() as usize;
+            self.0 &= self.0 - 1;
+            i
+        })
     }
 }
 
@@ -208,6 +267,17 @@ impl TriangleLanes for Scalar {
     #[inline(always)]
     fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
         lane_by_lane(ids.len(), |lane| self.0.intersect(&tris[ids[lane] as usize], t_min, t_max))
+    }
+
+    /// Nothing to read ahead: the scalar test reads each triangle itself.
+    type Quad = ();
+
+    #[inline(always)]
+    fn load_quad(_tris: &[Triangle], _ids: &[u32]) {}
+
+    #[inline(always)]
+    fn quad(&self, _quad: &(), tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+        self.listed(tris, ids, t_min, t_max)
     }
 
     /// The scalar loop itself: each triangle tested against the best hit so far (tie rule).
@@ -375,17 +445,33 @@ mod sse {
     const NAN_TRIANGLE_ROW: [f32; WIDTH] = [f32::NAN; WIDTH];
 
     impl Sse {
+        /// The test on gathered corners `v` of triangles `ids`, in constant axes.
         #[inline(always)]
-        fn listed_axes<const KX: usize, const KY: usize, const KZ: usize>(
+        fn gathered_axes<const KX: usize, const KY: usize, const KZ: usize>(
             &self,
+            v: &Corners,
             tris: &[Triangle],
             ids: &[u32],
             t_min: f32,
             t_max: f32,
         ) -> (u32, [f32; WIDTH]) {
-            let v = gather(tris, ids);
             let scalar = |lane: usize| self.sheared.intersect(&tris[ids[lane] as usize], t_min, t_max);
             self.test_axes(|k| (v[k][KX], v[k][KY], v[k][KZ]), [KX, KY, KZ], t_min, t_max, scalar)
+        }
+
+        /// Dispatched to a copy with constant axes, as the scalar test is, so the corners stay
+        /// in registers instead of being indexed through memory.
+        #[inline(always)]
+        fn gathered(&self, v: &Corners, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+            let r = &self.sheared;
+            match (r.kx, r.ky, r.kz) {
+                (1, 2, 0) => self.gathered_axes::<1, 2, 0>(v, tris, ids, t_min, t_max),
+                (2, 1, 0) => self.gathered_axes::<2, 1, 0>(v, tris, ids, t_min, t_max),
+                (2, 0, 1) => self.gathered_axes::<2, 0, 1>(v, tris, ids, t_min, t_max),
+                (0, 2, 1) => self.gathered_axes::<0, 2, 1>(v, tris, ids, t_min, t_max),
+                (0, 1, 2) => self.gathered_axes::<0, 1, 2>(v, tris, ids, t_min, t_max),
+                _ => self.gathered_axes::<1, 0, 2>(v, tris, ids, t_min, t_max),
+            }
         }
     }
 
@@ -401,19 +487,22 @@ mod sse {
             self.test(v, t_min, t_max, |lane| self.sheared.intersect(&block.triangle(lane), t_min, t_max))
         }
 
-        /// Dispatched once per quadruple to a copy with constant axes, as the scalar test is, so
-        /// the gathered corners stay in registers instead of being indexed through memory.
         #[inline(always)]
         fn listed(&self, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
-            let r = &self.sheared;
-            match (r.kx, r.ky, r.kz) {
-                (1, 2, 0) => self.listed_axes::<1, 2, 0>(tris, ids, t_min, t_max),
-                (2, 1, 0) => self.listed_axes::<2, 1, 0>(tris, ids, t_min, t_max),
-                (2, 0, 1) => self.listed_axes::<2, 0, 1>(tris, ids, t_min, t_max),
-                (0, 2, 1) => self.listed_axes::<0, 2, 1>(tris, ids, t_min, t_max),
-                (0, 1, 2) => self.listed_axes::<0, 1, 2>(tris, ids, t_min, t_max),
-                _ => self.listed_axes::<1, 0, 2>(tris, ids, t_min, t_max),
-            }
+            self.gathered(&gather(tris, ids), tris, ids, t_min, t_max)
+        }
+
+        /// The four triangles gathered and transposed once.
+        type Quad = Corners;
+
+        #[inline(always)]
+        fn load_quad(tris: &[Triangle], ids: &[u32]) -> Corners {
+            gather(tris, ids)
+        }
+
+        #[inline(always)]
+        fn quad(&self, quad: &Corners, tris: &[Triangle], ids: &[u32], t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+            self.gathered(quad, tris, ids, t_min, t_max)
         }
     }
 }

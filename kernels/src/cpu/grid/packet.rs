@@ -14,7 +14,8 @@
 //! then cell offsets) is opened for the rays that enter it before their best hit — the robust
 //! slab test of `cpu::bvh`, four rays at a time in SSE lanes — : a sub-grid is walked the same way
 //! with those rays, a list of triangles is tested against each of them by its own triangle test
-//! ([`TriangleLanes`], four triangles at a time as in the single-ray kernel).
+//! ([`TriangleLanes`], four triangles at a time as in the single-ray kernel, each four gathered
+//! once for all the rays: `triangle4::nearest_for_each`).
 //!
 //! **The same hits as one ray at a time.** A ray's hit is the least `(t, index)` over the
 //! triangles it is tested against (the tie rule, `triangle4`), and it is tested against every
@@ -36,7 +37,7 @@ use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, SUBGRID_BIT};
 use super::{cell_is_empty, cull_bound, occupied, walk};
 use crate::cpu::slab;
 use crate::cpu::triangle::nearest_hit;
-use crate::cpu::triangle4::{self, PACKET, TriangleLanes};
+use crate::cpu::triangle4::{self, Bits, PACKET, TriangleLanes};
 use crate::{Hit, NoStats};
 
 /// A packet's rays as bits: ray `i` is bit `i`.
@@ -123,18 +124,6 @@ struct Packet<'a, T> {
     cull_t: [f32; PACKET],
     /// The rays with a hit so far.
     found: Rays,
-}
-
-/// Each set bit of `rays`, lowest first.
-#[inline(always)]
-fn each(mut rays: Rays) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (rays != 0).then(|| {
-            let i = rays.trailing_zeros() as usize;
-            rays &= rays - 1;
-            i
-        })
-    })
 }
 
 /// `a < b ? a : b` and its twin: what `minss`/`maxss` compute, for values that are not NaN.
@@ -225,7 +214,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
         let k = axis?;
         (self.k, self.forward, self.across) = (k, signs[k] & 1 != 0, [(k + 1) % 3, (k + 2) % 3]);
         let f = &mut self.frustum;
-        for i in each(traced) {
+        for i in Bits(traced) {
             let ok = self.origin[k][i];
             f.origin_k = [lesser(f.origin_k[0], ok), greater(f.origin_k[1], ok)];
             f.reach_k = greater(f.reach_k, ok.abs());
@@ -249,7 +238,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
         let Some(top) = grid.headers.first() else { return };
         let k = self.k;
         let (mut entering, mut first) = (0 as Rays, if self.forward { u32::MAX } else { 0 });
-        for i in each(traced) {
+        for i in Bits(traced) {
             let (origin, inv) = (self.origin_of(i), self.inv_of(i));
             let Some(t) = slab::entry(&origin, &inv, &top.min, &top.max, self.t_min[i], f32::INFINITY) else {
                 continue;
@@ -327,7 +316,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
             }
             // A ray whose best hit lies before the slice's far face is done with this grid.
             let b_far = if self.forward { b_hi } else { b_lo };
-            for i in each(rays & self.found) {
+            for i in Bits(rays & self.found) {
                 if self.cull_t[i] < (b_far - self.origin[k][i]) * self.inv[k][i] {
                     rays &= !(1 << i);
                 }
@@ -372,7 +361,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
         #[cfg(not(target_arch = "x86_64"))]
         {
             let mut out: Rays = 0;
-            for i in each(rays) {
+            for i in Bits(rays) {
                 let (origin, inv) = (self.origin_of(i), self.inv_of(i));
                 let enters = slab::interval(&origin, &inv, min, max, self.t_min[i], self.cull_t[i]).is_some();
                 out |= Rays::from(enters) << i;
@@ -397,21 +386,32 @@ impl<T: TriangleLanes> Packet<'_, T> {
             return;
         }
         let tests = self.tests;
-        for i in each(reaching) {
-            let test = &tests[i];
-            let (best_t, best_prim) = (&mut self.best_t[i], &mut self.best_prim[i]);
-            let found = match grid.layout {
-                CellLayout::Refs => test.nearest(&grid.triangles, refs, self.t_min[i], best_t, best_prim),
-                CellLayout::Blocks => {
-                    let blocks = &grid.blocks[grid.cell_blocks[cell] as usize..grid.cell_blocks[cell + 1] as usize];
-                    triangle4::nearest_in_blocks(test, blocks, self.t_min[i], best_t, best_prim)
+        let found = match grid.layout {
+            // Each quadruple of the list gathered once for every ray that reaches the cell.
+            CellLayout::Refs => triangle4::nearest_for_each(
+                tests,
+                reaching,
+                &grid.triangles,
+                refs,
+                &self.t_min,
+                &mut self.best_t,
+                &mut self.best_prim,
+            ),
+            CellLayout::Blocks => {
+                let blocks = &grid.blocks[grid.cell_blocks[cell] as usize..grid.cell_blocks[cell + 1] as usize];
+                let mut found: Rays = 0;
+                for i in Bits(reaching) {
+                    let (best_t, best_prim) = (&mut self.best_t[i], &mut self.best_prim[i]);
+                    let took = triangle4::nearest_in_blocks(&tests[i], blocks, self.t_min[i], best_t, best_prim);
+                    found |= Rays::from(took) << i;
                 }
-            };
-            if found {
-                self.cull_t[i] = cull_bound(*best_t);
-                self.found |= 1 << i;
+                found
             }
+        };
+        for i in Bits(found) {
+            self.cull_t[i] = cull_bound(self.best_t[i]);
         }
+        self.found |= found;
     }
 }
 
