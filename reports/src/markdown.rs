@@ -232,6 +232,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(out);
     let mut notes = crate::gpu::notes(cases);
     notes.extend(references::simd_notes(cases));
+    notes.extend(references::packet_notes(cases));
     for line in &notes {
         let _ = writeln!(out, "- {line}");
     }

@@ -8,6 +8,11 @@
 //! machine load cancels; where there is none (GPU rows, `bvh` itself) it is the ratio of Mrays/s
 //! to the `bvh` row's. The ratio to the strongest is the row's ratio to `bvh` over the
 //! strongest's, so both use the paired timings where they exist.
+//!
+//! Like with like: a row that casts a tile's rays as packets (`embree.packet=8|16`, a grid's
+//! `packet=frustum`) is held to the strongest reference that casts packets too, and a row that
+//! casts one ray at a time to the strongest that does; only where the run has no reference of
+//! the row's kind is it held to the strongest of the other.
 
 use crate::compare::REFERENCE as BVH;
 use crate::schema::{Case, RenderStats};
@@ -49,12 +54,30 @@ pub fn vs_bvh(cases: &[&Case], case: &Case, r: &RenderStats) -> Option<f64> {
     (bvh.mrays_per_s > 0.0).then(|| r.mrays_per_s / bvh.mrays_per_s)
 }
 
-/// The strongest triangle reference for row `r` of `case`, and `r`'s speed over it.
+/// Whether a case casts a tile's rays as packets: Embree's `rtcIntersect8/16` (`packet` 8 or
+/// 16) or a grid's frustum packets (`packet` "frustum").
+pub fn casts_packets(case: &Case) -> bool {
+    match case.params.get("packet") {
+        Some(serde_json::Value::Number(n)) => n.as_u64().is_some_and(|n| n > 1),
+        Some(serde_json::Value::String(s)) => s != "off",
+        _ => false,
+    }
+}
+
+/// The strongest triangle reference for row `r` of `case`, and `r`'s speed over it: among the
+/// references that cast rays as `case` does (packets or one at a time), else among all.
 pub fn vs_strongest(cases: &[&Case], case: &Case, r: &RenderStats) -> Option<Strongest> {
+    let candidates = |like: bool| {
+        cases.iter().filter(move |c| {
+            TRIANGLE_REFERENCES.contains(&c.structure.as_str())
+                && c.machine == case.machine
+                && c.scene == case.scene
+                && (!like || casts_packets(c) == casts_packets(case))
+        })
+    };
+    let like = candidates(true).next().is_some();
     let mut best: Option<(String, f64)> = None;
-    for c in cases.iter().filter(|c| {
-        TRIANGLE_REFERENCES.contains(&c.structure.as_str()) && c.machine == case.machine && c.scene == case.scene
-    }) {
+    for c in candidates(like) {
         for row in c.render.iter().filter(|row| same_row(row, r)) {
             if let Some(ratio) = vs_bvh(cases, c, row)
                 && best.as_ref().is_none_or(|(_, b)| ratio > *b)
@@ -79,13 +102,16 @@ fn simd(case: &Case) -> Option<&str> {
     case.params.get("simd").and_then(|v| v.as_str())
 }
 
-/// Whether two cases ran with the same parameters apart from `simd` (so `org [fast]` is not
-/// compared with the paper's `org [scalar]`).
-fn same_but_simd(a: &Case, b: &Case) -> bool {
+/// Whether two cases ran with the same parameters apart from `keys` (so `org [fast]` is not
+/// compared with the paper's `org [scalar]`). A grid's `phases_ms` (where its build's time
+/// went) is a measurement, not a parameter, and is left out.
+fn same_params_but(a: &Case, b: &Case, keys: &[&str]) -> bool {
     let others = |c: &Case| {
         let mut p = c.params.clone();
         if let Some(map) = p.as_object_mut() {
-            map.remove("simd");
+            for key in keys.iter().chain(&["phases_ms"]) {
+                map.remove(*key);
+            }
         }
         p
     };
@@ -103,7 +129,7 @@ pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
             c.structure == scalar.structure
                 && c.resolution == scalar.resolution
                 && c.machine == scalar.machine
-                && same_but_simd(c, scalar)
+                && same_params_but(c, scalar, &["simd"])
         };
         for fast in cases.iter().filter(same) {
             let Some(isa) = simd(fast).filter(|&isa| isa != "scalar") else { continue };
@@ -117,6 +143,38 @@ pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
                     r.workload,
                     a / b,
                     scalar.label()
+                ));
+            }
+        }
+    }
+    lines
+}
+
+/// Each packet kernel's speed-up over the same structure casting one ray at a time (issue 30):
+/// for every case that casts packets, the case of the same structure, resolution, machine and
+/// other parameters that does not, row by row, as the ratio of their speeds over `bvh`.
+pub fn packet_notes(cases: &[&Case]) -> Vec<String> {
+    let mut lines = Vec::new();
+    for packed in cases.iter().filter(|c| casts_packets(c)) {
+        let twin = |c: &&&Case| {
+            c.structure == packed.structure
+                && c.resolution == packed.resolution
+                && c.machine == packed.machine
+                && !casts_packets(c)
+                // Embree names the call its `packet` picks (`intersect`).
+                && same_params_but(c, packed, &["packet", "intersect"])
+        };
+        for single in cases.iter().filter(twin) {
+            for r in &packed.render {
+                let Some(rs) = single.render.iter().find(|x| same_row(x, r)) else { continue };
+                let (Some(a), Some(b)) = (vs_bvh(cases, packed, r), vs_bvh(cases, single, rs)) else { continue };
+                lines.push(format!(
+                    "{} {}/{}: packets {:.2}× its single rays `{}` (speeds over bvh timed beside each)",
+                    packed.label(),
+                    r.backend,
+                    r.workload,
+                    a / b,
+                    single.label()
                 ));
             }
         }
@@ -192,6 +250,13 @@ mod tests {
         // The same structure with another parameter changed besides `simd` is not its scalar form.
         let mut tuned = with(case("bvh4", 3.0, Some(8.0), 9.0), "sse4", Some("fast"));
         tuned.params["bvh.preset"] = "fast".into();
+        // Where a build's time went is not a parameter: a grid's scalar form still pairs.
+        let mut grid = with(case("org", 5.0, Some(5.0), 3.0), "sse4", None);
+        let mut grid_scalar = with(case("org", 10.0, Some(5.0), 3.0), "scalar", Some("scalar"));
+        grid.params["phases_ms"] = serde_json::json!({ "top_ms": 1.0 });
+        grid_scalar.params["phases_ms"] = serde_json::json!({ "top_ms": 1.5 });
+        let grids = simd_notes(&[&bvh, &grid, &grid_scalar]);
+        assert!(grids.len() == 1 && grids[0].starts_with("org cpu/primary: SIMD (sse4) 2.00×"), "{grids:?}");
         let notes = simd_notes(&[&bvh, &fast, &slow, &other, &tuned]);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(
@@ -200,5 +265,44 @@ mod tests {
             notes[0]
         );
         assert!(simd_notes(&[&bvh, &fast, &other]).is_empty(), "no scalar form, no note");
+    }
+
+    /// Packet rows are held to packet references and single-ray rows to single-ray ones; the
+    /// packet note pairs a packet kernel with its own single rays.
+    #[test]
+    fn packets_are_compared_like_with_like() {
+        let with = |mut c: Case, params: serde_json::Value, variant: Option<&str>| {
+            c.params = params;
+            c.variant = variant.map(String::from);
+            c
+        };
+        let bvh = case("bvh", 10.0, None, 1.0);
+        let embree = with(case("embree", 5.0, Some(10.0), 9.0), serde_json::json!({ "packet": 1 }), None);
+        let embree16 =
+            with(case("embree", 2.0, Some(10.0), 9.0), serde_json::json!({ "packet": 16 }), Some("packet16"));
+        let org = with(case("org", 20.0, Some(10.0), 1.0), serde_json::json!({ "packet": "off" }), None);
+        let org_packets =
+            with(case("org", 10.0, Some(10.0), 1.0), serde_json::json!({ "packet": "frustum" }), Some("packets"));
+        let cases = vec![&bvh, &embree, &embree16, &org, &org_packets];
+        let r = |c: &Case| c.render[0].clone();
+        let single = vs_strongest(&cases, &org, &r(&org)).expect("a reference");
+        assert_eq!((single.label.as_str(), single.ratio), ("embree", 0.25));
+        let packed = vs_strongest(&cases, &org_packets, &r(&org_packets)).expect("a reference");
+        assert_eq!((packed.label.as_str(), packed.ratio), ("embree [packet16]", 0.2));
+        // Without a packet reference a packet row is held to the single-ray one.
+        let alone = vs_strongest(&[&bvh, &embree, &org_packets], &org_packets, &r(&org_packets)).expect("one");
+        assert_eq!(alone.label, "embree");
+        let notes = packet_notes(&cases);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes.iter().any(|n| n.starts_with("org [packets] cpu/primary: packets 2.00× its single rays `org`")),
+            "{notes:?}"
+        );
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.starts_with("embree [packet16] cpu/primary: packets 2.50× its single rays `embree`")),
+            "{notes:?}"
+        );
     }
 }

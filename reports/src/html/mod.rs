@@ -485,6 +485,7 @@ fn summary_table(out: &mut String, cases: &[&Case]) {
     let _ = writeln!(out, "</table></div>");
     let mut notes = crate::gpu::notes(cases);
     notes.extend(references::simd_notes(cases));
+    notes.extend(references::packet_notes(cases));
     if !notes.is_empty() {
         let _ = writeln!(out, "<ul class=\"note\">");
         for line in &notes {
