@@ -15,6 +15,7 @@ pub mod mesh;
 pub mod procedural;
 pub mod scene;
 pub mod subdivide;
+pub mod volume;
 
 pub use anim::{ANIMATED_SCENES, Animation, DEFAULT_FRAMES};
 pub use builtin::{BUILTIN_SCENES, load_scene};
@@ -23,3 +24,4 @@ pub use error::{Location, SceneError};
 pub use geom::{Aabb, Ray};
 pub use mesh::{Dropped, Mesh};
 pub use scene::{Object, Scene, Triangle};
+pub use volume::{Samples, Volume, load_volume};
