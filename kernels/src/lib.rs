@@ -30,6 +30,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod registry;
 pub mod stats;
+pub mod volume;
 
 use glam::Vec3;
 use scenes::{Camera, Ray};
