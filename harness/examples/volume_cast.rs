@@ -1,5 +1,5 @@
-//! Casts a volume with the dense marcher and with the brick map, and prints each one's time,
-//! samples per ray and the brick map's speed-up, at several transfer-function cuts — until the
+//! Casts a volume with the dense marcher, the brick map and the min/max octree, and prints each
+//! one's time, samples per ray and speed-up over the dense marcher, at several transfer-function cuts — until the
 //! `volume` workload joins the harness (issue 32):
 //!
 //! ```sh
@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
+use kernels::volume::octree::MinMaxOctree;
 use kernels::volume::{TransferFunction, render};
 use scenes::{Camera, CameraSpec};
 
@@ -41,14 +42,20 @@ fn main() -> anyhow::Result<()> {
         let (dense, dense_ms) = time(&|| render(&Dense, &volume, &tf, &camera, step));
         let (fast, fast_ms) = time(&|| render(&bricks, &volume, &tf, &camera, step));
         anyhow::ensure!(dense.rgba == fast.rgba, "cut {cut}: the brick map's image differs from the dense marcher's");
+        let octree = MinMaxOctree::build(&volume, &tf);
+        let (tree, tree_ms) = time(&|| render(&octree, &volume, &tf, &camera, step));
+        anyhow::ensure!(dense.rgba == tree.rgba, "cut {cut}: the octree's image differs from the dense marcher's");
         let rays = f64::from(size * size);
         println!(
             "cut {cut:.1}: bricks {:>5.1} % occupied; dense {dense_ms:>7.1} ms ({:>6.1} samples/ray), bricks {fast_ms:>7.1} ms \
-             ({:>6.1} samples/ray): {:.2}× dense; build {build_ms:.1} ms, transfer-function change {tf_ms:.2} ms",
+             ({:>6.1} samples/ray): {:.2}× dense; octree ({} levels) {tree_ms:>7.1} ms: {:.2}× dense; bricks' build \
+             {build_ms:.1} ms, transfer-function change {tf_ms:.2} ms",
             bricks.occupancy() * 100.0,
             dense.samples as f64 / rays,
             fast.samples as f64 / rays,
-            dense_ms / fast_ms
+            dense_ms / fast_ms,
+            octree.depth() + 1,
+            dense_ms / tree_ms
         );
     }
     Ok(())

@@ -7,6 +7,7 @@
 use glam::Vec3;
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
+use kernels::volume::octree::MinMaxOctree;
 use kernels::volume::{TransferFunction, VolumeImage, render};
 use scenes::{Camera, CameraSpec, Samples, Volume};
 
@@ -65,9 +66,18 @@ fn check(volume: &Volume) {
     let mut skipped_somewhere = false;
     for (tf_name, tf) in transfer_functions(lo, hi) {
         let bricks = Bricks::build(volume, &tf);
+        let octree = MinMaxOctree::build(volume, &tf);
         for (cam_name, camera) in cameras(volume) {
             let dense = render(&Dense, volume, &tf, &camera, step);
             let fast = render(&bricks, volume, &tf, &camera, step);
+            let tree = render(&octree, volume, &tf, &camera, step);
+            let differ = bits(&dense).iter().zip(bits(&tree)).filter(|(a, b)| **a != *b).count();
+            assert_eq!(
+                differ, 0,
+                "{} {tf_name} {cam_name}: octree: {differ} pixels differ from the dense marcher's",
+                volume.name
+            );
+            assert!(tree.samples <= dense.samples, "{} {tf_name}: the octree takes more samples", volume.name);
             let differ = bits(&dense).iter().zip(bits(&fast)).filter(|(a, b)| **a != *b).count();
             assert_eq!(
                 differ, 0,
@@ -139,6 +149,11 @@ fn a_transfer_function_change_equals_a_rebuild() {
             let rebuilt = Bricks::build(&v, b);
             assert_eq!(changed.empty, rebuilt.empty, "{from} -> {to}");
             assert_eq!(bits(&render(&changed, &v, b, &camera, 0.5)), bits(&render(&rebuilt, &v, b, &camera, 0.5)));
+            let mut tree = MinMaxOctree::build(&v, a);
+            tree.set_transfer_function(b);
+            let tree_rebuilt = MinMaxOctree::build(&v, b);
+            let (one, two) = (render(&tree, &v, b, &camera, 0.5), render(&tree_rebuilt, &v, b, &camera, 0.5));
+            assert_eq!((bits(&one), one.samples), (bits(&two), two.samples), "octree {from} -> {to}");
         }
     }
 }

@@ -83,7 +83,7 @@ impl Bricks {
 
     /// The position of brick face `i` on axis `a` (the domain's far side past the last brick).
     #[inline]
-    fn face(&self, a: usize, i: u32) -> f32 {
+    pub(super) fn face(&self, a: usize, i: u32) -> f32 {
         (i * BRICK).min(self.cells[a]) as f32 * self.spacing[a]
     }
 }

@@ -21,6 +21,7 @@
 
 pub mod bricks;
 pub mod dense;
+pub mod octree;
 
 use glam::Vec3;
 use rayon::prelude::*;
