@@ -118,33 +118,47 @@ fn same_params_but(a: &Case, b: &Case, keys: &[&str]) -> bool {
     others(a) == others(b)
 }
 
+/// The cases of the same structure, resolution and machine as `case` whose parameters differ
+/// from its at most in `keys`.
+fn twins<'a>(cases: &'a [&'a Case], case: &'a Case, keys: &'a [&'a str]) -> impl Iterator<Item = &'a Case> + 'a {
+    cases.iter().copied().filter(move |c| {
+        c.structure == case.structure
+            && c.resolution == case.resolution
+            && c.machine == case.machine
+            && same_params_but(c, case, keys)
+    })
+}
+
+/// Per render row that both hold, `fast`'s speed over `slow`'s as the ratio of their speeds over
+/// `bvh` (paired timings where they exist): "`fast` backend/workload: `what` 1.40× `relation`
+/// `slow` …".
+fn speed_ups(cases: &[&Case], fast: &Case, slow: &Case, what: &str, relation: &str) -> Vec<String> {
+    let mut lines = Vec::new();
+    for r in &fast.render {
+        let Some(rs) = slow.render.iter().find(|x| same_row(x, r)) else { continue };
+        let (Some(a), Some(b)) = (vs_bvh(cases, fast, r), vs_bvh(cases, slow, rs)) else { continue };
+        lines.push(format!(
+            "{} {}/{}: {what} {:.2}× {relation} `{}` (speeds over bvh timed beside each)",
+            fast.label(),
+            r.backend,
+            r.workload,
+            a / b,
+            slow.label()
+        ));
+    }
+    lines
+}
+
 /// Each SIMD kernel's speed-up over its own scalar form (issue 30: similar factors across
 /// families rule out an implementation confound): for every case run with `simd=scalar`, the
-/// case of the same structure, resolution, machine and other parameters that ran an instruction set, row by row,
-/// as the ratio of their speeds over `bvh` (paired timings where they exist).
+/// case of the same structure, resolution, machine and other parameters that ran an instruction
+/// set, row by row.
 pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
     let mut lines = Vec::new();
-    for scalar in cases.iter().filter(|c| simd(c) == Some("scalar")) {
-        let same = |c: &&&Case| {
-            c.structure == scalar.structure
-                && c.resolution == scalar.resolution
-                && c.machine == scalar.machine
-                && same_params_but(c, scalar, &["simd"])
-        };
-        for fast in cases.iter().filter(same) {
+    for scalar in cases.iter().copied().filter(|c| simd(c) == Some("scalar")) {
+        for fast in twins(cases, scalar, &["simd"]) {
             let Some(isa) = simd(fast).filter(|&isa| isa != "scalar") else { continue };
-            for r in &fast.render {
-                let Some(rs) = scalar.render.iter().find(|x| same_row(x, r)) else { continue };
-                let (Some(a), Some(b)) = (vs_bvh(cases, fast, r), vs_bvh(cases, scalar, rs)) else { continue };
-                lines.push(format!(
-                    "{} {}/{}: SIMD ({isa}) {:.2}× its scalar form `{}` (speeds over bvh timed beside each)",
-                    fast.label(),
-                    r.backend,
-                    r.workload,
-                    a / b,
-                    scalar.label()
-                ));
-            }
+            lines.extend(speed_ups(cases, fast, scalar, &format!("SIMD ({isa})"), "its scalar form"));
         }
     }
     lines
@@ -152,31 +166,13 @@ pub fn simd_notes(cases: &[&Case]) -> Vec<String> {
 
 /// Each packet kernel's speed-up over the same structure casting one ray at a time (issue 30):
 /// for every case that casts packets, the case of the same structure, resolution, machine and
-/// other parameters that does not, row by row, as the ratio of their speeds over `bvh`.
+/// other parameters that does not, row by row. (Embree names the call its `packet` picks:
+/// `intersect`.)
 pub fn packet_notes(cases: &[&Case]) -> Vec<String> {
     let mut lines = Vec::new();
-    for packed in cases.iter().filter(|c| casts_packets(c)) {
-        let twin = |c: &&&Case| {
-            c.structure == packed.structure
-                && c.resolution == packed.resolution
-                && c.machine == packed.machine
-                && !casts_packets(c)
-                // Embree names the call its `packet` picks (`intersect`).
-                && same_params_but(c, packed, &["packet", "intersect"])
-        };
-        for single in cases.iter().filter(twin) {
-            for r in &packed.render {
-                let Some(rs) = single.render.iter().find(|x| same_row(x, r)) else { continue };
-                let (Some(a), Some(b)) = (vs_bvh(cases, packed, r), vs_bvh(cases, single, rs)) else { continue };
-                lines.push(format!(
-                    "{} {}/{}: packets {:.2}× its single rays `{}` (speeds over bvh timed beside each)",
-                    packed.label(),
-                    r.backend,
-                    r.workload,
-                    a / b,
-                    single.label()
-                ));
-            }
+    for packed in cases.iter().copied().filter(|c| casts_packets(c)) {
+        for single in twins(cases, packed, &["packet", "intersect"]).filter(|c| !casts_packets(c)) {
+            lines.extend(speed_ups(cases, packed, single, "packets", "its single rays"));
         }
     }
     lines

@@ -229,13 +229,13 @@ fn enter_child(centre: Vec3A, t_min: f32, pos: Vec3A, half: f32) -> (u32, Vec3A)
 /// of a ray parallel to its slab's boundary) leaves `a`, as `f32::min` does. `f32::min` costs
 /// four more instructions per call for the NaN case, about a tenth of a step.
 #[inline(always)]
-fn below(a: f32, b: f32) -> f32 {
+pub(crate) fn below(a: f32, b: f32) -> f32 {
     if b < a { b } else { a }
 }
 
 /// `b` if it is above `a`, else `a` (one `maxss`): `a.max(b)` wherever `a` is not NaN, as [`below`].
 #[inline(always)]
-fn above(a: f32, b: f32) -> f32 {
+pub(crate) fn above(a: f32, b: f32) -> f32 {
     if b > a { b } else { a }
 }
 

@@ -35,6 +35,7 @@ use scenes::Ray;
 use structures::grid::{BRICK_SHIFT, CellLayout, Grid, GridHeader, SUBGRID_BIT};
 
 use super::{cell_is_empty, cull_bound, occupied, walk};
+use crate::cpu::octree_cast::{above, below};
 use crate::cpu::slab;
 use crate::cpu::triangle::nearest_hit;
 use crate::cpu::triangle4::{self, Bits, PACKET, TriangleLanes};
@@ -126,17 +127,6 @@ struct Packet<'a, T> {
     found: Rays,
 }
 
-/// `a < b ? a : b` and its twin: what `minss`/`maxss` compute, for values that are not NaN.
-#[inline(always)]
-fn lesser(a: f32, b: f32) -> f32 {
-    if a < b { a } else { b }
-}
-
-#[inline(always)]
-fn greater(a: f32, b: f32) -> f32 {
-    if a > b { a } else { b }
-}
-
 /// The hits of `rays` (at most [`PACKET`]) from `t_min` each, into `hits`: as a frustum packet
 /// where the rays allow it, else one ray at a time.
 #[inline(always)]
@@ -202,7 +192,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
             for a in 0..3 {
                 let finite = inv[a].is_finite();
                 signs[a] &= u32::from(finite && inv[a] > 0.0) | (u32::from(finite && inv[a] < 0.0) << 1);
-                least[a] = lesser(least[a], dir[a].abs());
+                least[a] = below(least[a], dir[a].abs());
             }
         }
         let mut axis: Option<usize> = None;
@@ -216,19 +206,19 @@ impl<T: TriangleLanes> Packet<'_, T> {
         let f = &mut self.frustum;
         for i in Bits(traced) {
             let ok = self.origin[k][i];
-            f.origin_k = [lesser(f.origin_k[0], ok), greater(f.origin_k[1], ok)];
-            f.reach_k = greater(f.reach_k, ok.abs());
+            f.origin_k = [below(f.origin_k[0], ok), above(f.origin_k[1], ok)];
+            f.reach_k = above(f.reach_k, ok.abs());
             for (j, &a) in self.across.iter().enumerate() {
                 let o = self.origin[a][i];
                 let slope = rays[i].dir[a] * self.inv[k][i];
-                f.origin[j] = [lesser(f.origin[j][0], o), greater(f.origin[j][1], o)];
-                f.slope[j] = [lesser(f.slope[j][0], slope), greater(f.slope[j][1], slope)];
-                f.reach[j] = greater(f.reach[j], o.abs());
-                f.steep[j] = greater(f.steep[j], slope.abs());
+                f.origin[j] = [below(f.origin[j][0], o), above(f.origin[j][1], o)];
+                f.slope[j] = [below(f.slope[j][0], slope), above(f.slope[j][1], slope)];
+                f.reach[j] = above(f.reach[j], o.abs());
+                f.steep[j] = above(f.steep[j], slope.abs());
             }
         }
         self.ahead = [0, 1].map(|j| (f.slope[j][0] + f.slope[j][1] >= 0.0) == self.forward);
-        let spread = greater(f.slope[0][1] - f.slope[0][0], f.slope[1][1] - f.slope[1][0]);
+        let spread = above(f.slope[0][1] - f.slope[0][0], f.slope[1][1] - f.slope[1][0]);
         (spread <= MAX_SPREAD).then_some(traced)
     }
 
@@ -282,8 +272,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
             let s = if self.forward { first + step } else { first - step };
             let (b_lo, b_hi) = (h.boundary(k, s), h.boundary(k, s + 1));
             let (a, z) = (self.frustum.across(b_lo), self.frustum.across(b_hi));
-            let range =
-                |j: usize, axis: usize| cell_range(h, axis, lesser(a[j][0], z[j][0]), greater(a[j][1], z[j][1]));
+            let range = |j: usize, axis: usize| cell_range(h, axis, below(a[j][0], z[j][0]), above(a[j][1], z[j][1]));
             let (Some((u0, u1)), Some((v0, v1))) = (range(0, u), range(1, v)) else { continue };
             let mut min = [0.0; 3];
             let mut max = [0.0; 3];
