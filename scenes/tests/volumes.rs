@@ -209,3 +209,24 @@ fn the_mricron_templates_load_as_the_scans_they_are() {
         assert!((0.1..0.7).contains(&tissue), "{name}: {tissue:.3} of the voxels above 40");
     }
 }
+
+#[test]
+fn the_particle_field_is_sparse_deterministic_and_fills_with_its_count() {
+    let occupancy = |count: u32| {
+        let v = load_volume(&format!("particles@96:{count}"), BUDGET).expect("builds");
+        let Samples::U8(s) = &v.samples else { panic!("u8 samples") };
+        assert_eq!(v.dims, [96; 3]);
+        (s.iter().filter(|&&x| x > 0).count() as f64 / s.len() as f64, *s.iter().max().expect("samples"))
+    };
+    let (few, peak) = occupancy(20);
+    let (many, _) = occupancy(400);
+    assert!(peak >= 200, "a blob's centre is dense: {peak}");
+    // A blob reaches 7.5 voxels (3σ): about 1,800 voxels each, 4 % of a 96³ box for 20.
+    assert!(few > 0.02 && few < 0.08, "20 blobs fill {few:.4} of the box");
+    assert!(many > 10.0 * few && many < 0.9, "400 blobs fill {many:.4}");
+    assert_eq!(load_volume("particles@40:30", BUDGET).expect("a"), load_volume("particles@40:30", BUDGET).expect("b"));
+    for bad in ["particles@40", "particles@x:3", "particles@1:3"] {
+        assert!(matches!(load_volume(bad, BUDGET), Err(SceneError::UnknownScene { .. })), "{bad}");
+    }
+    assert!(matches!(load_volume("particles@4096:10", BUDGET), Err(SceneError::TooLarge { .. })));
+}

@@ -117,6 +117,11 @@ fn bricks_give_the_dense_image_on_sparse_blobs() {
 }
 
 #[test]
+fn bricks_give_the_dense_image_on_a_particle_field() {
+    check(&scenes::load_volume("particles@64:40", 1 << 30).expect("builds"));
+}
+
+#[test]
 fn bricks_give_the_dense_image_on_the_mri_scan() {
     let required = std::env::var("ACCEL_BENCH_REQUIRE_VOLUMES").as_deref() == Ok("1");
     match scenes::load_volume("mri-ch2", 1 << 30) {

@@ -8,7 +8,8 @@
 //! - NIfTI-1 files, `.nii` and `.nii.gz`, through the `nifti` crate ([`nifti`]);
 //! - raw volumes named with their shape, `head.raw@256x256x225:u8` ([`raw`]);
 //! - built-in names: the MRI templates of Debian's `mricron-data` where installed
-//!   ([`BUILTIN_VOLUMES`]), and the Marschner–Lobb test signal at any size ([`procedural`]).
+//!   ([`BUILTIN_VOLUMES`]), the Marschner–Lobb test signal at any size, and a sparse particle field
+//!   (`particles@N:COUNT`, Gaussian blobs in an N³ box) ([`procedural`]).
 
 pub mod nifti;
 pub mod procedural;
@@ -146,12 +147,13 @@ pub const BUILTIN_VOLUMES: &[BuiltinVolume] = &[
 pub fn is_volume(name: &str) -> bool {
     BUILTIN_VOLUMES.iter().any(|v| v.name == name)
         || name.starts_with("marschner-lobb@")
+        || name.starts_with("particles@")
         || nifti::is_nifti(Path::new(name))
         || raw::parse_spec(name).is_some()
 }
 
-/// Loads the volume `name` — a built-in name, `marschner-lobb@N`, a `.nii`/`.nii.gz` file or a
-/// raw `path@XxYxZ:type` — allocating at most `max_bytes` for its file and its samples.
+/// Loads the volume `name` — a built-in name, `marschner-lobb@N`, `particles@N:COUNT`, a
+/// `.nii`/`.nii.gz` file or a raw `path@XxYxZ:type` — allocating at most `max_bytes` for its file and its samples.
 pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
     if let Some(builtin) = BUILTIN_VOLUMES.iter().find(|v| v.name == name) {
         return match builtin.path {
@@ -170,6 +172,15 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
         })?;
         return procedural::marschner_lobb(n, max_bytes);
     }
+    if let Some(shape) = name.strip_prefix("particles@") {
+        let parsed =
+            shape.split_once(':').and_then(|(n, count)| Some((n.parse::<u32>().ok()?, count.parse::<u32>().ok()?)));
+        let (n, count) = parsed.ok_or_else(|| SceneError::UnknownScene {
+            name: name.into(),
+            detail: format!("'{shape}' is not a field: particles@N:COUNT puts COUNT blobs in an N³ box"),
+        })?;
+        return procedural::particles(n, count, max_bytes);
+    }
     if let Some(spec) = raw::parse_spec(name) {
         return raw::load(&spec, max_bytes);
     }
@@ -178,7 +189,7 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
     }
     Err(SceneError::UnknownScene {
         name: name.into(),
-        detail: "not a volume: a built-in name, marschner-lobb@N, a .nii or .nii.gz file, or a raw \
+        detail: "not a volume: a built-in name, marschner-lobb@N, particles@N:COUNT, a .nii or .nii.gz file, or a raw \
                  volume with its shape (head.raw@256x256x225:u8)"
             .into(),
     })
