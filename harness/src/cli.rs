@@ -76,6 +76,8 @@ pub enum ListWhat {
     Structures,
     Backends,
     Presets,
+    /// Volume sources and volume structures (the `volume` workload).
+    Volumes,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -144,6 +146,13 @@ pub enum Preset {
     /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,
     /// renders three times. Long: about 40 minutes and 9 GB on 2 cores.
     VoxelGrids,
+    /// Seed 003's volumes (issue 32): the MRI scans (where mricron-data is installed),
+    /// Marschner–Lobb at 256³ and sparse particle fields at 1024³ and 2048³, cast front to back
+    /// through the dense marcher, the brick map and the min/max octree at 1024×1024, under
+    /// transfer functions fitted to 1, 10, 30 and 100 % visible voxels: speed-up over the dense
+    /// marcher against occupancy, samples and node visits per ray, bytes, build and
+    /// transfer-function update times, every image checked bit for bit against the dense one.
+    Volume,
     /// Every reproduction of docs/design.md §9 in one run and one report, which opens with "Paper
     /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,
     /// org-table1, svdag-tables, svdag-shadow, svdag-temporal and esvo-beam, one after the other,
@@ -186,6 +195,9 @@ pub enum WorkloadArg {
     Shadow,
     /// Primary plus --ao-samples ambient-occlusion rays per hit.
     Ao,
+    /// Volume sources (not triangle scenes) ray-cast front to back, emission–absorption through
+    /// a transfer function (`--param volume.*`; see `harness list volumes`).
+    Volume,
 }
 
 #[derive(Args, Debug, Clone, Default)]
@@ -194,10 +206,12 @@ pub struct RunArgs {
     #[arg(long, value_enum)]
     pub preset: Option<Preset>,
     /// Scenes, comma-separated: built-in names (see `harness list scenes`), grass-<N>, or paths to
-    /// .obj, .obj.gz, .gltf, .glb, .ply, .ply.gz, .stl files.
+    /// .obj, .obj.gz, .gltf, .glb, .ply, .ply.gz, .stl files; for the volume workload, volume
+    /// sources (see `harness list volumes`).
     #[arg(long, value_delimiter = ',')]
     pub scenes: Vec<String>,
-    /// Structures, comma-separated (see `harness list structures`).
+    /// Structures, comma-separated (see `harness list structures`, and `harness list volumes` for
+    /// the volume workload's).
     #[arg(long, value_delimiter = ',')]
     pub structures: Vec<String>,
     /// Backends, comma-separated.

@@ -33,12 +33,7 @@ pub fn write_case_images(
     let shaded = shaded(frame);
     let mut written = Vec::new();
     let mut picture = |name: String, rgb: &[u8]| -> Result<()> {
-        let path = format!("{rel}/{name}");
-        write(dir, &name, |p| images::write_png(p, w, h, rgb))?;
-        let (thumb, tw, th) = images::thumb_rgb(rgb, w, h);
-        let bytes = images::jpeg_bytes(tw, th, &thumb).context("encoding a thumbnail")?;
-        write_thumb(dir, &path, &bytes)?;
-        written.push(path);
+        written.push(write_picture(dir, rel, &name, (w, h), rgb)?);
         Ok(())
     };
     picture(format!("{stem}.png"), &shaded)?;
@@ -69,6 +64,18 @@ pub fn write_case_images(
         written.push(path);
     }
     Ok(written)
+}
+
+/// Writes the 8-bit RGB image `name` of `size` into `dir` (`rel` under the run directory) with its
+/// thumbnail; returns its path relative to the run directory.
+pub fn write_picture(dir: &Path, rel: &str, name: &str, size: (u32, u32), rgb: &[u8]) -> Result<String> {
+    let (w, h) = size;
+    let path = format!("{rel}/{name}");
+    write(dir, name, |p| images::write_png(p, w, h, rgb))?;
+    let (thumb, tw, th) = images::thumb_rgb(rgb, w, h);
+    let bytes = images::jpeg_bytes(tw, th, &thumb).context("encoding a thumbnail")?;
+    write_thumb(dir, &path, &bytes)?;
+    Ok(path)
 }
 
 /// Per pixel, how the frame's hit compares with the reference frame's, as a difference code

@@ -26,6 +26,7 @@ mod run;
 mod shadows;
 mod shard;
 mod timing;
+mod volume;
 
 use std::process::ExitCode;
 
@@ -56,7 +57,9 @@ fn main() -> ExitCode {
             .collect()
     };
     let result = match cli.command {
+        None if volume::wanted(&cli.run) => volume::run(&cli.run, command),
         None => run::resume_or_run(&cli.run, &given(&matches), command),
+        Some(Command::Run(args)) if volume::wanted(&args) => volume::run(&args, command),
         Some(Command::Run(args)) => {
             let sub = matches.subcommand_matches("run").map(given).unwrap_or_default();
             run::resume_or_run(&args, &sub, command)
@@ -124,6 +127,30 @@ fn list(what: ListWhat) {
             println!("  {:<14} {:<9} {}", s.name, s.family, s.summary);
         }
     }
+    if all || what == ListWhat::Volumes {
+        println!(
+            "volume sources (the volume workload; also marschner-lobb@N, particles@N:COUNT, .nii/.nii.gz files and raw \
+             volumes named path@XxYxZ:u8|u16|f32):"
+        );
+        for v in scenes::volume::BUILTIN_VOLUMES {
+            let absent = v.path.filter(|p| !std::path::Path::new(p).exists());
+            match absent {
+                Some(path) => println!(
+                    "  {:<16} {} — absent here: `apt-get install mricron-data` puts it at {path}",
+                    v.name, v.about
+                ),
+                None => println!("  {:<16} {}", v.name, v.about),
+            }
+        }
+        println!("volume structures:");
+        for s in kernels::volume::VOLUME_STRUCTURES {
+            println!("  {:<14} {}", s.name, s.summary);
+        }
+        println!("volume parameters (--param KEY=VALUE):");
+        for (key, what) in volume::PARAMS {
+            println!("  {key:<18} {what}");
+        }
+    }
     if all || what == ListWhat::Backends {
         println!("backends:\n  cpu        rayon over 8×8 tiles");
         match kernels::gpu::probe() {
@@ -166,6 +193,9 @@ fn list(what: ListWhat) {
         println!(
             "  voxel-grids grid or octree on the same voxels: vdb (dense, compact, compact-block), tree64 (tree, dag), brickmap \
              beside svo, esvo (contours off, on), svdag and bvh on six scenes at 1024³…8192³, 1024×1024"
+        );
+        println!(
+            "  volume     seed 003's volumes: mri-ch2, mri-ch2better, marschner-lobb@256, particles at 1024³ and 2048³ through dense, bricks, octree at 1 / 10 / 30 / 100 % visible voxels, 1024×1024"
         );
         let (scaled, full) = cli::PAPER_MINUTES;
         println!(

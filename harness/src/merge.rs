@@ -62,7 +62,13 @@ pub fn merge(args: &MergeArgs, command: String) -> Result<()> {
 /// Copies each image of `run` (read from `dir`) with its thumbnail (made again from the image where
 /// it has none) to `out`, at the path `to` gives.
 fn copy_images(run: &reports::Results, dir: &Path, out: &Path, to: impl Fn(&str) -> String) -> Result<()> {
-    let images = run.cases.iter().flat_map(|c| &c.images).flat_map(|p| [p.clone(), reports::images::thumb_path(p)]);
+    let volume_images = run.volumes.iter().filter_map(|v| v.image.as_ref());
+    let images = run
+        .cases
+        .iter()
+        .flat_map(|c| &c.images)
+        .chain(volume_images)
+        .flat_map(|p| [p.clone(), reports::images::thumb_path(p)]);
     for path in images {
         let (src, dst) = (dir.join(&path), out.join(to(&path)));
         if !src.exists() {

@@ -54,6 +54,12 @@ pub struct PartPlan {
 
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
 
+/// The volume preset's sources (issue 32): the MRI scans where mricron-data is installed, the
+/// Marschner–Lobb signal, and particle fields whose blob counts keep about the same density
+/// (particles@512:3000 covers 14 % of its bricks at a mid cut) at 1024³ and at 2048³ (8 GiB).
+pub const VOLUME_SOURCES: &[&str] =
+    &["mri-ch2", "mri-ch2better", "marschner-lobb@256", "particles@1024:24000", "particles@2048:192000"];
+
 /// The voxel-grids preset's levels: 1024³ … 8192³.
 const VOXEL_GRID_LEVELS: std::ops::RangeInclusive<u32> = 10..=13;
 
@@ -79,6 +85,7 @@ impl Preset {
             Preset::SvdagShadow => "svdag-shadow",
             Preset::EsvoBeam => "esvo-beam",
             Preset::VoxelGrids => "voxel-grids",
+            Preset::Volume => "volume",
             Preset::Paper => "paper",
         }
     }
@@ -191,6 +198,7 @@ impl Preset {
             }
             Preset::EsvoBeam => vec!["bvh", "esvo"],
             Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "svo", "esvo", "svdag"],
+            Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
             // Its parts name their own.
             Preset::Paper => Vec::new(),
             Preset::OrgFig1 => vec!["ug", "org"],
@@ -222,7 +230,12 @@ impl Preset {
             // 1024³, the resolution of seed 001's Table 5 scenes' comparisons (issue 13).
             Preset::SvdagTemporal => &["voxel.levels=10"],
             Preset::SvdagShadow => &[],
-            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids | Preset::Paper => &[],
+            Preset::OrgFast
+            | Preset::EsvoScale
+            | Preset::EsvoBeam
+            | Preset::VoxelGrids
+            | Preset::Volume
+            | Preset::Paper => &[],
         }
     }
 
@@ -258,6 +271,7 @@ impl Preset {
             Preset::SvdagShadow => vec!["room", "city", "terrain"],
             Preset::EsvoBeam => vec!["bunny", "dragon", "city", "terrain", "room"],
             Preset::VoxelGrids => vec!["bunny", "dragon", "city", "menger", "mandelbulb", "room"],
+            Preset::Volume => VOLUME_SOURCES.to_vec(),
             Preset::Paper => Vec::new(),
         };
         list.into_iter().map(String::from).collect()
@@ -280,7 +294,9 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
-            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids => (1024, 1024),
+            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids | Preset::Volume => {
+                (1024, 1024)
+            }
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
             Preset::SvdagShadow => (512, 512),
@@ -326,7 +342,7 @@ impl Preset {
 
     /// Repetitions (warm-up, timed) of a render where they differ from the default 1 + 5.
     fn render_reps(self) -> Option<(u32, u32)> {
-        (self == Preset::VoxelGrids).then_some((1, 3))
+        matches!(self, Preset::VoxelGrids | Preset::Volume).then_some((1, 3))
     }
 
     /// Repetitions (warm-up, timed) of a whole animation's render where they differ from the
@@ -342,6 +358,7 @@ impl Preset {
             // 16 s a build of the kitchen's 24 frames in `all` mode.
             Preset::SvdagTemporal if scaled => Some((0, 3)),
             Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids => Some((0, 1)),
+            Preset::Volume => Some((0, 3)),
             // 16384² light maps: about a minute per build with six faces.
             Preset::SvdagShadow => Some((0, 3)),
             _ => None,
@@ -430,10 +447,12 @@ impl RunArgs {
             backends,
             workloads: workloads
                 .into_iter()
-                .map(|w| match w {
-                    WorkloadArg::Primary => Workload::Primary,
-                    WorkloadArg::Shadow => Workload::Shadow,
-                    WorkloadArg::Ao => Workload::Ao { samples: self.ao_samples },
+                .filter_map(|w| match w {
+                    WorkloadArg::Primary => Some(Workload::Primary),
+                    WorkloadArg::Shadow => Some(Workload::Shadow),
+                    WorkloadArg::Ao => Some(Workload::Ao { samples: self.ao_samples }),
+                    // Not a ray workload of the triangle matrix: `crate::volume` runs it.
+                    WorkloadArg::Volume => None,
                 })
                 .collect(),
             width: self.width.unwrap_or(w),

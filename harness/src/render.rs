@@ -46,6 +46,9 @@ pub fn render_images(args: &RenderArgs) -> Result<()> {
         WorkloadArg::Primary => Workload::Primary,
         WorkloadArg::Shadow => Workload::Shadow,
         WorkloadArg::Ao => Workload::Ao { samples: args.ao_samples },
+        WorkloadArg::Volume => anyhow::bail!(
+            "harness render draws triangle scenes; a volume's images come from `harness run --workload volume`"
+        ),
     };
     let budget = Budget::new(args.memory_limit);
     // Each structure's frame and steps are kept until its scene is done, with the reference's.

@@ -113,6 +113,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         parts: part_records,
         skipped: Vec::new(),
         phases_s: Default::default(),
+        volumes: Vec::new(),
     };
     let mut progress = Progress::default();
     let mut out = match resumed {
@@ -552,7 +553,7 @@ fn variants(plan: &Plan, params: &Params, structure: &str) -> Vec<(Params, Optio
 }
 
 /// Refuses to time a build without optimisation unless told to (docs/design.md §1).
-fn check_optimised(allow: bool) -> Result<()> {
+pub(crate) fn check_optimised(allow: bool) -> Result<()> {
     let opt = env!("ACCEL_BENCH_OPT_LEVEL");
     if matches!(opt, "0" | "1") && !allow {
         bail!(
@@ -600,7 +601,7 @@ fn validate(plan: &Plan) -> Result<()> {
     Ok(())
 }
 
-fn settings(plan: &Plan, params: &Params, command: String) -> Settings {
+pub(crate) fn settings(plan: &Plan, params: &Params, command: String) -> Settings {
     Settings {
         preset: plan.preset.name().into(),
         command,

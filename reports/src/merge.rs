@@ -6,7 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::schema::{Case, Machine, MergedRun, Part, Results, SCHEMA, Settings, SkippedCase};
+use crate::schema::{Case, Machine, MergedRun, Part, Results, SCHEMA, Settings, SkippedCase, VolumeCase};
 
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
@@ -60,6 +60,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         skipped: Vec::new(),
         // Each run's own phases stay in its file.
         phases_s: Default::default(),
+        volumes: Vec::new(),
     };
     for (tag, run) in runs {
         // The parts of many-part runs, each name once (a case names its part, not its run's).
@@ -74,12 +75,18 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         if run.merged.is_empty() {
             merged.merged.push(MergedRun::of(tag.clone(), run));
             merged.cases.extend(run.cases.iter().map(|c| tagged(c, tag)));
+            merged.volumes.extend(run.volumes.iter().map(|v| VolumeCase {
+                machine: Some(tag.clone()),
+                image: v.image.as_deref().map(|p| merged_image_path(tag, p)),
+                ..v.clone()
+            }));
             merged
                 .skipped
                 .extend(run.skipped.iter().map(|k| SkippedCase { scene: format!("{} @{tag}", k.scene), ..k.clone() }));
         } else {
             merged.merged.extend(run.merged.iter().cloned());
             merged.cases.extend(run.cases.iter().cloned());
+            merged.volumes.extend(run.volumes.iter().cloned());
             merged.skipped.extend(run.skipped.iter().cloned());
         }
     }
@@ -267,6 +274,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 parts: Vec::new(),
                 skipped: Vec::new(),
                 phases_s: Default::default(),
+                volumes: results.volumes.iter().filter(|v| v.machine.as_deref() == Some(&m.tag)).cloned().collect(),
             };
             (Some(m.tag.clone()), view)
         })

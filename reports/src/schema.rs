@@ -39,6 +39,73 @@ pub struct Results {
     /// `total untimed`); written when the run ends, so empty in a run still going.
     #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
     pub phases_s: BTreeMap<String, f64>,
+    /// The `volume` workload's cases (issue 32): volume sources cast through the volume
+    /// structures; empty for a run of triangle scenes.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub volumes: Vec<VolumeCase>,
+}
+
+/// One volume structure casting one volume source under one transfer function (the `volume`
+/// workload, issue 32). Every structure's image is checked against the dense marcher's, which
+/// it must equal bit for bit; its renders are timed in rounds with the dense marcher's, so
+/// `render.samples_ms[i]` pairs with `dense_timing.samples_ms[i]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct VolumeCase {
+    pub source: String,
+    /// Where the source came from: a path, or the procedural recipe.
+    pub provenance: String,
+    pub dims: [u32; 3],
+    /// `u8`, `u16` or `f32`.
+    pub sample_type: String,
+    pub source_load_ms: f64,
+    /// The transfer function's label: `visible 10 %` for one fitted to an occupancy, `custom`
+    /// for `--param volume.tf`.
+    pub transfer: String,
+    /// Its control points, `value:r,g,b,a` separated by `;`.
+    pub transfer_points: String,
+    /// The fraction of voxels the fit aimed at; `None` for a custom transfer function.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub target_visible: Option<f64>,
+    /// The fraction of voxels whose value the transfer function makes visible (opacity above 0).
+    pub visible_voxels: f64,
+    /// The fraction of 8³ bricks not empty (the same for every structure: the brick map's).
+    pub occupied_bricks: f64,
+    pub structure: String,
+    /// Lattice step along a ray, in the volume's units.
+    pub step: f32,
+    /// Bytes the structure holds beside the samples (the samples: `dims` × the type's size).
+    pub bytes: u64,
+    pub build: Timing,
+    /// Re-deriving emptiness for this transfer function, without a rebuild.
+    pub transfer_update: Timing,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    pub render: Timing,
+    pub mrays_per_s: f64,
+    /// The dense marcher's renders, timed in rounds with this structure's.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub dense_timing: Option<Timing>,
+    pub samples_per_ray: f64,
+    /// Bricks or octree nodes visited per ray (0 for the dense marcher).
+    pub visits_per_ray: f64,
+    /// Pixels whose RGBA differs from the dense marcher's in any bit (must be 0).
+    pub mismatched_pixels: u64,
+    /// The image, relative to the run directory (one per source and transfer function: every
+    /// structure's image is the same).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub image: Option<String>,
+    /// The machine tag in a merged result file (see [`Case::machine`]).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub machine: Option<String>,
+}
+
+impl VolumeCase {
+    /// The dense marcher's median time over this structure's: the speed-up of its skipping.
+    pub fn speed_up(&self) -> Option<f64> {
+        let dense = self.dense_timing.as_ref()?.ms_median;
+        (self.render.ms_median > 0.0).then(|| dense / self.render.ms_median)
+    }
 }
 
 /// A case of the matrix that produced no measurement, and why.
@@ -421,6 +488,7 @@ impl Results {
             parts: Vec::new(),
             skipped: Vec::new(),
             phases_s: self.phases_s.clone(),
+            volumes: Vec::new(),
         }
     }
 

@@ -2,13 +2,14 @@
 //! the Marschner–Lobb signal, a sparse field of blobs, and the MRI scan where installed, under
 //! transfer functions from nothing empty to almost everything empty, from a camera outside the
 //! volume and one inside it — with skipping really happening where space is empty, and a
-//! transfer-function change giving what a rebuild with it gives.
+//! transfer-function change giving what a rebuild with it gives. Transfer functions fitted to an
+//! occupancy (the harness's sweep) make that fraction of voxels visible.
 
 use glam::Vec3;
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
 use kernels::volume::octree::MinMaxOctree;
-use kernels::volume::{TransferFunction, VolumeImage, render};
+use kernels::volume::{Histogram, TransferFunction, VOLUME_STRUCTURES, VolumeImage, render};
 use scenes::{Camera, CameraSpec, Samples, Volume};
 
 const SIZE: u32 = 72;
@@ -35,8 +36,13 @@ fn blobs(n: u32) -> Volume {
     }
 }
 
-/// Transfer functions over `[lo, hi]`: nothing empty, a quarter, most, almost all, all.
-fn transfer_functions(lo: f32, hi: f32) -> Vec<(&'static str, TransferFunction)> {
+/// Transfer functions over `volume`'s values `[lo, hi]`: nothing empty, a quarter, most, almost
+/// all, all; one rising from the least value (regions of that value empty, all others visible); and
+/// two fitted to 10 % and 1 % of the voxels visible, as the harness fits them.
+fn transfer_functions(volume: &Volume) -> Vec<(&'static str, TransferFunction)> {
+    let (lo, hi) = volume.value_range();
+    let histogram = Histogram::of(volume);
+    let fitted = |fraction: f64| TransferFunction::ramp_above(histogram.threshold_for(fraction), hi, 0.5);
     let everywhere =
         TransferFunction::new(vec![(lo, [0.2, 0.4, 0.9, 0.02]), (hi, [1.0, 1.0, 0.8, 0.3])]).expect("valid");
     let none = TransferFunction::new(vec![(lo, [1.0, 1.0, 1.0, 0.0])]).expect("valid");
@@ -46,6 +52,9 @@ fn transfer_functions(lo: f32, hi: f32) -> Vec<(&'static str, TransferFunction)>
         ("ramp 60 %", TransferFunction::ramp(lo, hi, 0.6, 0.9)),
         ("ramp 97 %", TransferFunction::ramp(lo, hi, 0.97, 1.0)),
         ("all transparent", none),
+        ("from the least value", TransferFunction::ramp_above(lo, hi, 0.8)),
+        ("visible 10 %", fitted(0.1)),
+        ("visible 1 %", fitted(0.01)),
     ]
 }
 
@@ -61,23 +70,28 @@ fn bits(image: &VolumeImage) -> Vec<[u32; 4]> {
 }
 
 fn check(volume: &Volume) {
-    let (lo, hi) = volume.value_range();
     let step = volume.spacing[0] * 0.5;
     let mut skipped_somewhere = false;
-    for (tf_name, tf) in transfer_functions(lo, hi) {
+    for (tf_name, tf) in transfer_functions(volume) {
         let bricks = Bricks::build(volume, &tf);
-        let octree = MinMaxOctree::build(volume, &tf);
+        let built: Vec<_> = VOLUME_STRUCTURES[1..].iter().map(|e| (e.name, (e.build)(volume, &tf))).collect();
         for (cam_name, camera) in cameras(volume) {
             let dense = render(&Dense, volume, &tf, &camera, step);
-            let fast = render(&bricks, volume, &tf, &camera, step);
-            let tree = render(&octree, volume, &tf, &camera, step);
-            for (structure, image) in [("bricks", &fast), ("octree", &tree)] {
-                let differ = bits(&dense).iter().zip(bits(image)).filter(|(a, b)| **a != *b).count();
+            for (structure, built) in &built {
+                let image = render(built.as_ref(), volume, &tf, &camera, step);
+                let differ = bits(&dense).iter().zip(bits(&image)).filter(|(a, b)| **a != *b).count();
                 let what = format!("{} {tf_name} {cam_name}: {structure}", volume.name);
                 assert_eq!(differ, 0, "{what}: {differ} pixels differ from the dense marcher's");
                 assert!(image.samples <= dense.samples, "{what} takes more samples than the dense marcher");
+                assert!(image.visits > 0, "{what}: no node visits counted");
+                skipped_somewhere |= image.samples < dense.samples;
+                if tf_name == "all transparent" {
+                    // Every brick is skipped; a ray may still sample a span that ends a rounding
+                    // error past the domain's far face (taken, never skipped: at most one sample).
+                    assert!(image.samples <= u64::from(SIZE * SIZE) / 16, "{what}: {} samples taken", image.samples);
+                }
             }
-            skipped_somewhere |= fast.samples < dense.samples;
+            assert_eq!(dense.visits, 0, "the dense marcher visits no nodes");
             if tf_name == "nothing empty" {
                 assert_eq!(bricks.occupancy(), 1.0, "{}: nothing is empty", volume.name);
             }
@@ -87,9 +101,6 @@ fn check(volume: &Volume) {
                     "{}: a transparent volume shows nothing",
                     volume.name
                 );
-                // Every brick is skipped; a ray may still sample a span that ends a rounding
-                // error past the domain's far face (taken, never skipped: at most one sample).
-                assert!(fast.samples <= u64::from(SIZE * SIZE) / 16, "{}: {} samples taken", volume.name, fast.samples);
             }
         }
     }
@@ -136,8 +147,7 @@ fn bricks_give_the_dense_image_on_the_mri_scan() {
 #[test]
 fn a_transfer_function_change_equals_a_rebuild() {
     let v = blobs(64);
-    let (lo, hi) = v.value_range();
-    let tfs = transfer_functions(lo, hi);
+    let tfs = transfer_functions(&v);
     let camera = Camera::new(CameraSpec::canonical(v.bounds()), SIZE, SIZE);
     for (from, a) in &tfs {
         for (to, b) in &tfs {
@@ -171,5 +181,52 @@ fn transfer_functions_interpolate_and_refuse_bad_points() {
         [vec![], vec![(1.0, [0.0; 4]), (1.0, [0.0; 4])], vec![(f32::NAN, [0.0; 4])], vec![(0.0, [2.0, 0.0, 0.0, 0.0])]]
     {
         assert!(TransferFunction::new(bad.clone()).is_err(), "{bad:?}");
+    }
+}
+
+/// The fit the harness sweeps with: on a field whose values are known, each fraction of voxels
+/// above the threshold is the nearest one held, the threshold's own voxels are not visible, a
+/// fraction of 1 makes every voxel visible, and a ramp starting at the background value leaves
+/// the background's bricks empty (a constant range is not widened).
+#[test]
+fn transfer_functions_fitted_to_an_occupancy_show_that_fraction() {
+    // 16³ voxels: value z (0..15) on layer z, so each value holds 1/16 of the voxels.
+    let n = 16u32;
+    let samples: Vec<u8> = (0..n * n * n).map(|i| (i / (n * n)) as u8).collect();
+    let v = Volume {
+        name: "layers".into(),
+        dims: [n; 3],
+        spacing: [1.0; 3],
+        samples: Samples::U8(samples),
+        source: "test".into(),
+    };
+    let h = Histogram::of(&v);
+    for (fraction, threshold) in [(0.5, 7.0), (0.25, 11.0), (1.0 / 16.0, 14.0), (0.3, 10.0)] {
+        assert_eq!(h.threshold_for(fraction), threshold, "{fraction}");
+        let tf = TransferFunction::ramp_above(threshold, 15.0, 0.5);
+        let shown = h.visible(&tf);
+        assert_eq!(shown, h.above(threshold));
+        assert_eq!(shown, (15.0 - threshold as f64) / 16.0, "{fraction}");
+    }
+    let all = TransferFunction::ramp_above(h.threshold_for(1.0), 15.0, 0.5);
+    assert_eq!(h.visible(&all), 1.0);
+    assert!(Bricks::build(&v, &all).occupancy() == 1.0);
+    // The particle field's background is 0: a ramp from 0 leaves its empty bricks empty.
+    let field = scenes::load_volume("particles@64:4", 1 << 30).expect("builds");
+    let from_zero = TransferFunction::ramp_above(0.0, 255.0, 0.5);
+    let occupancy = Bricks::build(&field, &from_zero).occupancy();
+    assert!(occupancy > 0.0 && occupancy < 0.5, "{occupancy}");
+    assert!(TransferFunction::ramp_above(0.0, 255.0, 0.5).is_empty_over(0.0, 0.0));
+    assert!(!TransferFunction::ramp_above(0.0, 255.0, 0.5).is_empty_over(0.0, 1e-30));
+}
+
+#[test]
+fn transfer_functions_parse_what_they_describe_and_refuse_bad_text() {
+    let tf = TransferFunction::parse("40:0,0,0,0; 255:1,0.9,0.8,0.6").expect("parses");
+    assert_eq!(tf.points(), &[(40.0, [0.0; 4]), (255.0, [1.0, 0.9, 0.8, 0.6])]);
+    assert_eq!(TransferFunction::parse(&tf.describe()), Ok(tf));
+    for bad in ["", "40", "40:1,1,1", "x:1,1,1,1", "40:1,1,1,2", "50:0,0,0,0;40:1,1,1,1", "40:1,1,1,1,1"] {
+        let e = TransferFunction::parse(bad).expect_err(bad);
+        assert!(!e.is_empty(), "{bad}");
     }
 }

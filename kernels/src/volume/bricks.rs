@@ -13,7 +13,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use scenes::{Ray, Volume};
 
-use super::{Compositor, TransferFunction, VolumeMarch};
+use super::{Compositor, TransferFunction, VolumeMarch, VolumeStructure};
 
 /// Voxel cells per brick edge.
 pub const BRICK: u32 = 8;
@@ -88,6 +88,20 @@ impl Bricks {
     }
 }
 
+impl VolumeStructure for Bricks {
+    fn set_transfer_function(&mut self, tf: &TransferFunction) {
+        Bricks::set_transfer_function(self, tf);
+    }
+
+    fn bytes(&self) -> u64 {
+        Bricks::bytes(self)
+    }
+
+    fn occupancy(&self) -> Option<f64> {
+        Some(Bricks::occupancy(self))
+    }
+}
+
 impl VolumeMarch for Bricks {
     fn march(&self, ray: &Ray, t0: f32, t1: f32, c: &mut Compositor) {
         let o = ray.origin.to_array();
@@ -112,6 +126,7 @@ impl VolumeMarch for Bricks {
                 (0..3).map(|a| (a, t_next[a])).fold((0, f32::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
             let t_out = t_exit.min(t1);
             let index = (cell[0] + self.res[0] * (cell[1] + self.res[1] * cell[2])) as usize;
+            c.visits += 1;
             if t_out > t_in && !self.empty[index] && !c.take(t_in, t_out) {
                 return;
             }

@@ -3,7 +3,7 @@
 
 use scenes::Ray;
 
-use super::{Compositor, VolumeMarch};
+use super::{Compositor, TransferFunction, VolumeMarch, VolumeStructure};
 
 /// No structure at all: the volume's samples as they are.
 #[derive(Clone, Copy, Debug, Default)]
@@ -12,5 +12,17 @@ pub struct Dense;
 impl VolumeMarch for Dense {
     fn march(&self, _ray: &Ray, t0: f32, t1: f32, c: &mut Compositor) {
         c.take(t0, t1);
+    }
+}
+
+impl VolumeStructure for Dense {
+    fn set_transfer_function(&mut self, _tf: &TransferFunction) {}
+
+    fn bytes(&self) -> u64 {
+        0
+    }
+
+    fn occupancy(&self) -> Option<f64> {
+        None
     }
 }

@@ -16,8 +16,13 @@
 //! `α`; the colour gains `T · α · rgb` and the transmittance `T` becomes `T · (1 − α)`. The ray stops
 //! once `T` falls below [`MIN_TRANSMITTANCE`] (early termination).
 //!
-//! Structures: [`dense`] (no skipping) and [`bricks`] (a min/max value range per brick of voxels,
-//! emptiness re-derived from a new transfer function without a rebuild).
+//! Structures ([`VOLUME_STRUCTURES`], what the harness's `volume` workload measures): [`dense`]
+//! (no skipping), [`bricks`] (a min/max value range per brick of voxels, emptiness re-derived from
+//! a new transfer function without a rebuild) and [`octree`] (a min/max tree over the bricks).
+//!
+//! **Transfer functions by occupancy.** [`Histogram`] fits a ramp to a volume so that a chosen
+//! fraction of its voxels is visible ([`Histogram::threshold_for`]): how the harness sweeps from
+//! almost everything empty to nothing empty on any source.
 
 pub mod bricks;
 pub mod dense;
@@ -25,7 +30,7 @@ pub mod octree;
 
 use glam::Vec3;
 use rayon::prelude::*;
-use scenes::{Camera, Ray, Volume};
+use scenes::{Camera, Ray, Samples, Volume};
 
 /// Below this transmittance a ray stops: what lies behind adds under 0.5 % of the colour.
 pub const MIN_TRANSMITTANCE: f32 = 0.005;
@@ -62,10 +67,39 @@ impl TransferFunction {
     /// opacity of `peak` at `hi`. `cut` sets how much of the value range is empty.
     pub fn ramp(lo: f32, hi: f32, cut: f32, peak: f32) -> Self {
         let span = (hi - lo).max(f32::MIN_POSITIVE);
-        let start = lo + cut.clamp(0.0, 1.0) * span;
-        let end = (lo + span).max(start + span * 1e-3);
+        Self::ramp_above(lo + cut.clamp(0.0, 1.0) * span, hi, peak)
+    }
+
+    /// Transparent up to `start` (inclusive), then rising to a white opacity of `peak` at `hi`
+    /// (or just past `start` where `hi` is not above it): every value above `start` is visible.
+    /// All transparent where `start` or `hi` is not finite.
+    pub fn ramp_above(start: f32, hi: f32, peak: f32) -> Self {
+        let span = (hi - start).abs().max(start.abs() * 1e-3).max(1e-3);
+        let end = hi.max(start + span * 1e-3);
         let points = vec![(start, [1.0, 1.0, 1.0, 0.0]), (end, [1.0, 0.9, 0.8, peak.clamp(0.0, 1.0)])];
-        Self::new(points).unwrap_or_else(|_| Self { points: vec![(lo, [0.0; 4])] })
+        Self::new(points).unwrap_or_else(|_| Self { points: vec![(0.0, [0.0; 4])] })
+    }
+
+    /// Parses control points written `value:r,g,b,a` and separated by `;` (the harness's
+    /// `--param volume.tf=…`), e.g. `40:0,0,0,0;255:1,0.9,0.8,0.6`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut points = Vec::new();
+        for (i, item) in text.split(';').map(str::trim).filter(|p| !p.is_empty()).enumerate() {
+            let expected = || format!("control point {i} '{item}': expected value:r,g,b,a (e.g. 40:1,1,1,0.5)");
+            let (value, rgba) = item.split_once(':').ok_or_else(expected)?;
+            let value: f32 = value.trim().parse().map_err(|_| expected())?;
+            let channels: Vec<f32> =
+                rgba.split(',').map(|c| c.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| expected())?;
+            let rgba: [f32; 4] = channels.try_into().map_err(|_| expected())?;
+            points.push((value, rgba));
+        }
+        Self::new(points)
+    }
+
+    /// The control points as [`TransferFunction::parse`] reads them.
+    pub fn describe(&self) -> String {
+        let point = |&(v, c): &(f32, [f32; 4])| format!("{v}:{},{},{},{}", c[0], c[1], c[2], c[3]);
+        self.points.iter().map(point).collect::<Vec<_>>().join(";")
     }
 
     pub fn points(&self) -> &[(f32, [f32; 4])] {
@@ -98,7 +132,14 @@ impl TransferFunction {
     /// Whether every value in `[lo, hi]` is fully transparent. The range is widened first by
     /// more than the rounding of a trilinear interpolation (which can pass its corners' range by
     /// an ulp or so), so a sample judged empty this way has opacity 0 bit for bit.
+    ///
+    /// A constant range (`lo == hi`) is not widened: interpolating between equal values gives
+    /// that value exactly (`a + (a − a) · t = a`), so a region of zeros under a ramp that starts
+    /// at zero stays empty.
     pub fn is_empty_over(&self, lo: f32, hi: f32) -> bool {
+        if lo == hi {
+            return self.max_opacity(lo, hi) == 0.0;
+        }
         let e = (lo.abs() + hi.abs()) * (1.0 / (1 << 16) as f32) + f32::MIN_POSITIVE;
         self.max_opacity(lo - e, hi + e) == 0.0
     }
@@ -168,11 +209,24 @@ pub struct Compositor<'a> {
     pub rgb: [f32; 3],
     pub transmittance: f32,
     pub samples: u64,
+    /// Nodes (bricks, octree nodes) the structure visited for this ray: counted by the
+    /// structures, 0 for the dense marcher.
+    pub visits: u64,
 }
 
 impl<'a> Compositor<'a> {
     pub fn new(sampler: &'a Sampler<'a>, tf: &'a TransferFunction, ray: &Ray, step: f32) -> Self {
-        Self { sampler, tf, origin: ray.origin, dir: ray.dir, step, rgb: [0.0; 3], transmittance: 1.0, samples: 0 }
+        Self {
+            sampler,
+            tf,
+            origin: ray.origin,
+            dir: ray.dir,
+            step,
+            rgb: [0.0; 3],
+            transmittance: 1.0,
+            samples: 0,
+            visits: 0,
+        }
     }
 
     /// Composites the lattice samples of the span `[t_a, t_b)`, front to back; `false` once the
@@ -212,6 +266,8 @@ pub struct VolumeImage {
     pub height: u32,
     pub rgba: Vec<[f32; 4]>,
     pub samples: u64,
+    /// Nodes visited in all (see [`Compositor::visits`]).
+    pub visits: u64,
 }
 
 /// Casts every pixel's ray of `camera` through `structure` over `volume`, sampling every `step`.
@@ -224,10 +280,10 @@ pub fn render(
 ) -> VolumeImage {
     let sampler = Sampler::new(volume);
     let (lo, hi) = sampler.domain();
-    let rows: Vec<(Vec<[f32; 4]>, u64)> = (0..camera.height)
+    let rows: Vec<(Vec<[f32; 4]>, u64, u64)> = (0..camera.height)
         .into_par_iter()
         .map(|y| {
-            let mut samples = 0;
+            let (mut samples, mut visits) = (0, 0);
             let row = (0..camera.width)
                 .map(|x| {
                     let ray = camera.ray(x, y);
@@ -245,17 +301,151 @@ pub fn render(
                         structure.march(&ray, t0, t1, &mut c);
                     }
                     samples += c.samples;
+                    visits += c.visits;
                     [c.rgb[0], c.rgb[1], c.rgb[2], 1.0 - c.transmittance]
                 })
                 .collect();
-            (row, samples)
+            (row, samples, visits)
         })
         .collect();
-    let samples = rows.iter().map(|(_, s)| s).sum();
+    let samples = rows.iter().map(|r| r.1).sum();
+    let visits = rows.iter().map(|r| r.2).sum();
     VolumeImage {
         width: camera.width,
         height: camera.height,
-        rgba: rows.into_iter().flat_map(|(r, _)| r).collect(),
+        rgba: rows.into_iter().flat_map(|(r, _, _)| r).collect(),
         samples,
+        visits,
+    }
+}
+
+/// A structure a volume is cast through, as the harness builds and measures it.
+pub trait VolumeStructure: VolumeMarch + Send {
+    /// Re-derives which parts are empty under `tf` from what was built, without a rebuild.
+    fn set_transfer_function(&mut self, tf: &TransferFunction);
+    /// Bytes the structure holds beside the volume's samples.
+    fn bytes(&self) -> u64;
+    /// The fraction of its bricks that are not empty; `None` for a structure without bricks.
+    fn occupancy(&self) -> Option<f64>;
+}
+
+/// A volume structure by name: what `harness list` shows and how to build it.
+pub struct VolumeEntry {
+    pub name: &'static str,
+    pub summary: &'static str,
+    pub build: fn(&Volume, &TransferFunction) -> Box<dyn VolumeStructure>,
+}
+
+/// Every volume structure; `dense` first, the oracle the others are checked against.
+pub const VOLUME_STRUCTURES: &[VolumeEntry] = &[
+    VolumeEntry {
+        name: "dense",
+        summary: "every lattice sample, nothing skipped (the oracle)",
+        build: |_, _| Box::new(dense::Dense),
+    },
+    VolumeEntry {
+        name: "bricks",
+        summary: "8³-voxel bricks with their value ranges, walked by a 3D-DDA",
+        build: |v, tf| Box::new(bricks::Bricks::build(v, tf)),
+    },
+    VolumeEntry {
+        name: "octree",
+        summary: "min/max octree over the bricks (seed 003's N³-tree, N = 2)",
+        build: |v, tf| Box::new(octree::MinMaxOctree::build(v, tf)),
+    },
+];
+
+pub fn find_volume_structure(name: &str) -> Option<&'static VolumeEntry> {
+    VOLUME_STRUCTURES.iter().find(|e| e.name == name)
+}
+
+/// How a volume's values are spread, for fitting transfer functions to an occupancy: exact
+/// counts per value for `u8` and `u16` samples; for `f32`, up to [`Histogram::F32_SAMPLES`]
+/// samples taken at an even stride, sorted.
+pub struct Histogram {
+    /// The distinct values, ascending, with how many voxels hold each (of the samples read).
+    values: Vec<(f32, u64)>,
+    total: u64,
+}
+
+impl Histogram {
+    pub const F32_SAMPLES: usize = 1 << 22;
+
+    pub fn of(volume: &Volume) -> Self {
+        fn counts(bins: usize, samples: impl ParallelIterator<Item = usize>) -> Vec<u64> {
+            samples
+                .fold(
+                    || vec![0u64; bins],
+                    |mut h, v| {
+                        h[v] += 1;
+                        h
+                    },
+                )
+                .reduce(|| vec![0u64; bins], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect())
+        }
+        let values: Vec<(f32, u64)> = match &volume.samples {
+            Samples::U8(v) => counts(256, v.par_iter().map(|&x| usize::from(x)))
+                .into_iter()
+                .enumerate()
+                .filter(|&(_, n)| n > 0)
+                .map(|(x, n)| (x as f32, n))
+                .collect(),
+            Samples::U16(v) => counts(65536, v.par_iter().map(|&x| usize::from(x)))
+                .into_iter()
+                .enumerate()
+                .filter(|&(_, n)| n > 0)
+                .map(|(x, n)| (x as f32, n))
+                .collect(),
+            Samples::F32(v) => {
+                let stride = v.len().div_ceil(Self::F32_SAMPLES).max(1);
+                let mut s: Vec<f32> = v.iter().step_by(stride).copied().filter(|x| !x.is_nan()).collect();
+                s.sort_by(f32::total_cmp);
+                let mut values: Vec<(f32, u64)> = Vec::new();
+                for x in s {
+                    match values.last_mut() {
+                        Some(last) if last.0 == x => last.1 += 1,
+                        _ => values.push((x, 1)),
+                    }
+                }
+                values
+            }
+        };
+        let total = values.iter().map(|&(_, n)| n).sum();
+        Self { values, total }
+    }
+
+    /// The fraction of voxels whose value is above `threshold`.
+    pub fn above(&self, threshold: f32) -> f64 {
+        let n: u64 = self.values.iter().filter(|&&(v, _)| v > threshold).map(|&(_, n)| n).sum();
+        n as f64 / self.total.max(1) as f64
+    }
+
+    /// The value `t` whose fraction of voxels above it ([`Histogram::above`]) is nearest
+    /// `fraction`: one of the values held (a voxel equal to `t` is not above it), or just below
+    /// the least for a fraction of 1 (every voxel above).
+    pub fn threshold_for(&self, fraction: f64) -> f32 {
+        let Some(&(least, _)) = self.values.first() else { return 0.0 };
+        let below_least = least - least.abs().max(1.0) * 1e-3;
+        let mut best = (below_least, (1.0 - fraction).abs());
+        let mut above = self.total;
+        for &(v, n) in &self.values {
+            above -= n;
+            let miss = (above as f64 / self.total as f64 - fraction).abs();
+            if miss < best.1 {
+                best = (v, miss);
+            }
+        }
+        best.0
+    }
+
+    /// The fraction of voxels whose value `tf` gives an opacity above 0.
+    pub fn visible(&self, tf: &TransferFunction) -> f64 {
+        let n: u64 = self.values.iter().filter(|&&(v, _)| tf.eval(v)[3] > 0.0).map(|&(_, n)| n).sum();
+        n as f64 / self.total.max(1) as f64
+    }
+
+    /// The greatest value held.
+    pub fn max(&self) -> f32 {
+        self.values.last().map_or(0.0, |&(v, _)| v)
     }
 }

@@ -16,7 +16,7 @@
 use scenes::{Ray, Volume};
 
 use super::bricks::Bricks;
-use super::{Compositor, TransferFunction, VolumeMarch};
+use super::{Compositor, TransferFunction, VolumeMarch, VolumeStructure};
 
 /// A ray as the node spans need it: its origin and the reciprocals of its direction.
 struct Lines {
@@ -130,6 +130,7 @@ impl MinMaxOctree {
     /// children in the order the ray enters them, or its brick's span handed to `comp`. Returns
     /// `false` once the ray has terminated.
     fn visit(&self, ray: &Lines, level: usize, c: [u32; 3], cursor: &mut f32, end: f32, comp: &mut Compositor) -> bool {
+        comp.visits += 1;
         if level == 0 {
             let index = (c[0] + self.bricks.res[0] * (c[1] + self.bricks.res[1] * c[2])) as usize;
             let go_on = self.bricks.empty[index] || comp.take(*cursor, end);
@@ -180,6 +181,20 @@ impl MinMaxOctree {
             return go_on;
         }
         true
+    }
+}
+
+impl VolumeStructure for MinMaxOctree {
+    fn set_transfer_function(&mut self, tf: &TransferFunction) {
+        MinMaxOctree::set_transfer_function(self, tf);
+    }
+
+    fn bytes(&self) -> u64 {
+        MinMaxOctree::bytes(self)
+    }
+
+    fn occupancy(&self) -> Option<f64> {
+        Some(self.bricks.occupancy())
     }
 }
 

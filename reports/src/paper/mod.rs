@@ -8,7 +8,8 @@
 //! One file per reproduced result, above the claims (`crate::claims`) and the helpers they share:
 //! [`org_scaling`] (seed 002 Fig. 1 and Fig. 2), [`org_table1`] (Table 1), [`svdag_tables`] (seed
 //! 001 Tables 1–3, Fig. 13), [`svdag_shadow`] (Table 4), [`svdag_temporal`] (Tables 5–6), [`esvo`]
-//! (seed 000 §5.6 and §6.2, ESVO at scale), [`voxel_grids`] (grid or octree on the same voxels);
+//! (seed 000 §5.6 and §6.2, ESVO at scale), [`voxel_grids`] (grid or octree on the same voxels),
+//! [`volumes`] (seed 003's volumes: empty space skipped per structure);
 //! `grid_builds` is what the grid reproductions share.
 
 pub mod esvo;
@@ -20,6 +21,7 @@ pub mod svdag_tables;
 pub mod svdag_temporal;
 #[cfg(test)]
 mod tests;
+pub mod volumes;
 pub mod voxel_grids;
 
 use crate::claims::Sheet;
@@ -48,5 +50,7 @@ pub fn section(results: &Results) -> Sheet {
     out.append(esvo_budget(results));
     // Grid or octree on the same voxels wherever a run has a hierarchical voxel grid.
     out.append(voxel_grids::section(results));
+    // Seed 003's volumes wherever a run has volume cases.
+    out.append(volumes::section(results));
     out
 }
