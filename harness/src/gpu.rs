@@ -45,7 +45,13 @@ pub fn measure(
     if workload != Workload::Primary {
         return Ok(Outcome::Skipped("the GPU backend casts primary rays only".into()));
     }
-    let opts = DispatchOptions { warmup: plan.warmup, reps: plan.reps, count_steps: true, split_words: None };
+    let opts = DispatchOptions {
+        warmup: plan.warmup,
+        reps: plan.reps,
+        count_steps: true,
+        split_words: None,
+        ..Default::default()
+    };
     let Some(render) = render_primary(ctx, accel, camera, &opts)? else {
         // Only the CPU libraries (obvhs's BVH2, Embree) have none.
         return Ok(Outcome::Skipped("this structure has no GPU kernel (a CPU library)".into()));

@@ -42,7 +42,7 @@ const ROUND_BUDGET_MS: f64 = 60_000.0;
 
 /// A warm-up round whose dense render takes this long is kept as a timed round: the one-time
 /// costs a warm-up absorbs are well under 1 % of it.
-const LONG_RENDER_MS: f64 = 5_000.0;
+const LONG_RENDER_MS: f64 = 1_000.0;
 
 /// Whether the run is a volume run: the `volume` preset or workload, or only volume sources named.
 pub fn wanted(args: &RunArgs) -> bool {
@@ -74,9 +74,10 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     }
     let args = &RunArgs { preset: Some(preset), ..args.clone() };
     let plan = args.plans().map_err(|e| anyhow::anyhow!(e))?.remove(0).plan;
-    if plan.backends.contains(&Backend::Gpu) {
-        bail!("the volume workload has no GPU kernels yet (issue 32): run it with --backend cpu");
-    }
+    let gpu = match plan.backends.contains(&Backend::Gpu) {
+        true => Some(crate::gpu::context()?),
+        false => None,
+    };
     if let Some(bad) = plan.scenes.iter().find(|s| !scenes::volume::is_volume(s)) {
         bail!(
             "'{bad}' is not a volume source: the volume workload casts volumes (see `harness list volumes`); \
@@ -122,7 +123,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     let budget = Budget::new(args.memory_limit);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
     let started = Instant::now();
-    let cases = (plan.scenes.len() * sweep.len() * structures.len()) as u64;
+    let backends = plan.backends.len().max(1);
+    let cases = (plan.scenes.len() * sweep.len() * structures.len() * backends) as u64;
     let bar = ProgressBar::new(cases).with_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} volume cases  {wide_msg}")
             .context("progress template")?,
@@ -130,7 +132,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut failed = Vec::new();
     for source in &plan.scenes {
-        let run = SourceRun { plan: &plan, args, structures: &structures, sweep: &sweep, bar: &bar };
+        let run = SourceRun { plan: &plan, args, structures: &structures, sweep: &sweep, bar: &bar, gpu };
         let outcome = pool.install(|| run.measure(source, &budget, &mut out));
         if let Err(e) = outcome {
             let reason = format!("{e:#}");
@@ -143,7 +145,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
                 reason,
                 ..Default::default()
             })?;
-            bar.inc((sweep.len() * structures.len()) as u64);
+            bar.inc((sweep.len() * structures.len() * backends) as u64);
         }
     }
     bar.finish_and_clear();
@@ -152,8 +154,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     out.write_summary()?;
     for v in out.results.volumes.iter().filter(|v| v.mismatched_pixels > 0) {
         failed.push(format!(
-            "{} [{}] {}: {} pixels differ from the dense marcher's",
-            v.source, v.transfer, v.structure, v.mismatched_pixels
+            "{} [{}] {} ({}): {} pixels differ from the CPU dense marcher's",
+            v.source, v.transfer, v.structure, v.backend, v.mismatched_pixels
         ));
     }
     eprintln!(
@@ -163,7 +165,11 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     );
     let errors = out.results.skipped.iter().filter(|k| k.kind == "error").count();
     if !failed.is_empty() {
-        bail!("images not bit-identical to the dense marcher's:\n  {}", failed.join("\n  "));
+        bail!(
+            "images that differ from the dense marcher's (CPU: in any bit; GPU: by more than {}):\n  {}",
+            reports::VOLUME_GPU_TOLERANCE,
+            failed.join("\n  ")
+        );
     }
     if errors > 0 {
         bail!("{errors} volume sources failed (listed above, in results.json's `skipped` and in the report)");
@@ -243,6 +249,7 @@ struct SourceRun<'a> {
     structures: &'a [&'static volume::VolumeEntry],
     sweep: &'a Sweep,
     bar: &'a ProgressBar,
+    gpu: Option<&'static kernels::gpu::GpuContext>,
 }
 
 /// A structure as built for a source: its build's timing.
@@ -255,6 +262,8 @@ struct Built {
 impl SourceRun<'_> {
     fn measure(&self, name: &str, budget: &Budget, out: &mut RunOutput) -> Result<()> {
         let (plan, bar) = (self.plan, self.bar);
+        let backends = plan.backends.len().max(1);
+        let cpu_device = machine::machine().cpu;
         bar.set_message(format!("{name}: loading"));
         // The samples are read within what the budget allows; the images come on top.
         let load_limit = budget.most_units(1);
@@ -269,7 +278,7 @@ impl SourceRun<'_> {
         )?;
         let histogram = Histogram::of(&volume);
         let transfers = self.sweep.transfers(&volume, &histogram);
-        bar.inc(((self.sweep.len() - transfers.len()) * self.structures.len()) as u64);
+        bar.inc(((self.sweep.len() - transfers.len()) * self.structures.len() * backends) as u64);
         let step_voxels: f32 = Params::parse(plan.params.iter().map(String::as_str))?.get("volume.step", 0.5)?;
         let step = volume.spacing.iter().copied().fold(f32::INFINITY, f32::min) * step_voxels;
         let camera = Camera::new(CameraSpec::canonical(volume.bounds()), plan.width, plan.height);
@@ -290,7 +299,8 @@ impl SourceRun<'_> {
             for b in &mut built {
                 updates.push(timed_update(b.structure.as_mut(), &transfer.tf, plan.build_reps.max(1)));
             }
-            let rounds = self.rounds(&built, &volume, &transfer.tf, &camera, step);
+            let cast = Cast { volume: &volume, tf: &transfer.tf, camera: &camera, step };
+            let rounds = self.rounds(&built, cast);
             let image = match self.args.no_images {
                 true => None,
                 false => Some(write_image(out, name, &transfer.label, &rounds.images[0])?),
@@ -318,6 +328,8 @@ impl SourceRun<'_> {
                     visible_voxels: histogram.visible(&transfer.tf),
                     occupied_bricks: bricks.occupancy(),
                     structure: b.entry.name.into(),
+                    backend: "cpu".into(),
+                    device: cpu_device.clone(),
                     step,
                     bytes: b.structure.bytes(),
                     build: b.build.clone(),
@@ -331,20 +343,106 @@ impl SourceRun<'_> {
                     samples_per_ray: picture.samples as f64 / rays,
                     visits_per_ray: picture.visits as f64 / rays,
                     mismatched_pixels: mismatched,
+                    max_difference: None,
                     image: image.clone(),
                     machine: None,
                 });
                 bar.inc(1);
+            }
+            if let Some(ctx) = self.gpu {
+                bar.set_message(format!("{name} [{}]: rendering on the GPU", transfer.label));
+                let first = out.results.volumes.len() - built.len();
+                let cpu_cases: Vec<VolumeCase> = out.results.volumes[first..].to_vec();
+                match self.gpu_rows(ctx, &built, cast, &rounds.images[0], &cpu_cases) {
+                    Ok(GpuRows { rows, without_kernel: skipped }) => {
+                        out.results.volumes.extend(rows);
+                        for (structure, reason) in skipped {
+                            out.push_skipped(reports::SkippedCase {
+                                scene: format!("{name} [{}]", transfer.label),
+                                structure,
+                                kind: "unavailable".into(),
+                                reason,
+                                ..Default::default()
+                            })?;
+                        }
+                    }
+                    Err(e) => {
+                        let reason = format!("the GPU backend: {e:#}");
+                        bar.suspend(|| eprintln!("  {name} [{}]: GPU rows skipped: {reason}", transfer.label));
+                        out.push_skipped(reports::SkippedCase {
+                            scene: format!("{name} [{}]", transfer.label),
+                            structure: "*".into(),
+                            kind: "error".into(),
+                            reason,
+                            ..Default::default()
+                        })?;
+                    }
+                }
+                bar.inc(built.len() as u64);
             }
             out.write_summary()?;
         }
         Ok(())
     }
 
+    /// The GPU rows of one transfer function: each structure with a WGSL kernel, the dense
+    /// marcher first (each row's speed-up is over the GPU dense marcher's kernel time), each image
+    /// checked against the CPU dense image `oracle` within [`reports::VOLUME_GPU_TOLERANCE`]; the
+    /// CPU rows (`cpu_cases`, in the same order as `built`) lend the fields both share. Also
+    /// returns the structures without a GPU kernel, with why.
+    fn gpu_rows(
+        &self,
+        ctx: &'static kernels::gpu::GpuContext,
+        built: &[Built],
+        cast: Cast,
+        oracle: &VolumeImage,
+        cpu_cases: &[VolumeCase],
+    ) -> Result<GpuRows> {
+        let Cast { volume, tf, camera, step } = cast;
+        use kernels::gpu::volume::{GpuVolume, render_volume};
+        let plan = self.plan;
+        let opts = kernels::gpu::DispatchOptions { warmup: plan.warmup, reps: plan.reps.max(1), ..Default::default() };
+        let rays = f64::from(plan.width) * f64::from(plan.height);
+        let mut rows: Vec<VolumeCase> = Vec::new();
+        let mut skipped = Vec::new();
+        for (b, cpu) in built.iter().zip(cpu_cases) {
+            let walk = match GpuVolume::of(b.entry.name, b.structure.as_ref()) {
+                Ok(walk) => walk,
+                Err(why) => {
+                    skipped.push((format!("{} (gpu)", b.entry.name), why));
+                    continue;
+                }
+            };
+            let gpu = phases::time(Phase::TimedRenders, || render_volume(ctx, volume, &walk, tf, camera, step, &opts))?;
+            let differences: Vec<f32> = gpu
+                .image
+                .rgba
+                .iter()
+                .zip(&oracle.rgba)
+                .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max))
+                .collect();
+            let render = Timing::from_samples(&gpu.run.kernel_ms);
+            rows.push(VolumeCase {
+                backend: "gpu".into(),
+                device: ctx.adapter_info().describe(),
+                threads: 0,
+                mrays_per_s: rays / (render.ms_median.max(1e-9) * 1e3),
+                dense_timing: rows.first().map(|dense| dense.render.clone()),
+                render,
+                samples_per_ray: gpu.image.samples as f64 / rays,
+                visits_per_ray: gpu.image.visits as f64 / rays,
+                mismatched_pixels: differences.iter().filter(|d| **d > reports::VOLUME_GPU_TOLERANCE).count() as u64,
+                max_difference: Some(differences.iter().copied().fold(0.0, f32::max)),
+                ..cpu.clone()
+            });
+        }
+        Ok(GpuRows { rows, without_kernel: skipped })
+    }
+
     /// Warm-up rounds, then timed rounds until `reps` or [`ROUND_BUDGET_MS`]: every structure
     /// rendered once a round, the dense marcher first. The images are the first round's.
-    fn rounds(&self, built: &[Built], volume: &Volume, tf: &TransferFunction, camera: &Camera, step: f32) -> Rounds {
-        let plan = self.plan;
+    fn rounds(&self, built: &[Built], cast: Cast) -> Rounds {
+        let (plan, Cast { volume, tf, camera, step }) = (self.plan, cast);
         let mut images: Vec<VolumeImage> = Vec::new();
         let mut times = vec![Vec::new(); built.len()];
         let (mut spent, mut warm_ups) = (0.0, plan.warmup);
@@ -371,6 +469,21 @@ impl SourceRun<'_> {
         }
         Rounds { images, times }
     }
+}
+
+/// What one transfer function's renders cast: the source, the function, the rays and the step.
+#[derive(Clone, Copy)]
+struct Cast<'a> {
+    volume: &'a Volume,
+    tf: &'a TransferFunction,
+    camera: &'a Camera,
+    step: f32,
+}
+
+/// One transfer function's GPU rows, and the structures without a GPU kernel with why.
+struct GpuRows {
+    rows: Vec<VolumeCase>,
+    without_kernel: Vec<(String, String)>,
 }
 
 /// The renders of one transfer function: per structure its first image and its timed reps.

@@ -7,6 +7,11 @@ mod common;
 
 use common::{TINY, harness, read_json, stderr, temp_dir};
 
+/// Whether this machine must have a GPU adapter (as `kernels::gpu::context_for_tests` decides).
+fn gpu_required() -> bool {
+    std::env::var("ACCEL_BENCH_REQUIRE_GPU").is_ok_and(|v| v.trim() == "1") || std::env::var_os("CI").is_some()
+}
+
 #[test]
 fn a_volume_run_records_every_structure_beside_the_dense_marcher() {
     let out = temp_dir("volume");
@@ -81,7 +86,6 @@ fn a_volume_run_refuses_what_it_cannot_do() {
     let out_arg = out.to_string_lossy().into_owned();
     let cases: &[(&[&str], &str)] = &[
         (&["--scenes", "teapot"], "not a volume source"),
-        (&["--scenes", "marschner-lobb@16", "--gpu"], "no GPU kernels"),
         (&["--scenes", "marschner-lobb@16", "--structures", "bvh"], "not a volume structure"),
         (&["--scenes", "marschner-lobb@16", "--param", "volume.stepp=1"], "not a parameter of the volume workload"),
         (&["--scenes", "marschner-lobb@16", "--param", "volume.occupancy=0,200"], "not a percentage"),
@@ -102,4 +106,54 @@ fn a_volume_run_refuses_what_it_cannot_do() {
     assert!(!o.status.success());
     let results = read_json(&out.join("results.json"));
     assert_eq!(results["skipped"][0]["scene"], "/nonexistent/head.nii.gz", "{}", stderr(&o));
+}
+
+/// The GPU rows: the dense marcher and the brick map on the WGSL kernel, each image within the
+/// tolerance of the CPU dense image (bit for bit on lavapipe), with the same samples and visits
+/// as their CPU rows; the octree, which has no kernel yet, listed as unavailable, not failed.
+#[test]
+fn gpu_volume_rows_agree_with_the_cpu() {
+    let out = temp_dir("volume-gpu");
+    let out_arg = out.to_string_lossy().into_owned();
+    let mut args = vec![
+        "run",
+        "--workload",
+        "volume",
+        "--scenes",
+        "particles@40:6",
+        "--backend",
+        "cpu,gpu",
+        "--param",
+        "volume.occupancy=2,100",
+        "--out",
+        &out_arg,
+        "--no-images",
+    ];
+    args.extend_from_slice(TINY);
+    let o = harness(&args);
+    if !o.status.success() {
+        assert!(stderr(&o).contains("GPU backend was asked for"), "stderr: {}", stderr(&o));
+        assert!(!gpu_required(), "a GPU adapter is required here but the run failed: {}", stderr(&o));
+        eprintln!("gpu_volume_rows_agree_with_the_cpu: skipped, no GPU adapter");
+        return;
+    }
+    let results = read_json(&out.join("results.json"));
+    let cases = results["volumes"].as_array().expect("volume cases");
+    let gpu: Vec<_> = cases.iter().filter(|c| c["backend"] == "gpu").collect();
+    assert_eq!(gpu.len(), 4, "dense and bricks under two transfer functions");
+    for g in &gpu {
+        let what = format!("{} {}", g["transfer"], g["structure"]);
+        assert_eq!(g["mismatched_pixels"], 0, "{what}");
+        assert!(g["max_difference"].as_f64().is_some_and(|d| d <= 1e-5), "{what}");
+        assert!(g["device"].as_str().is_some_and(|d| !d.is_empty()), "{what}");
+        let cpu = cases
+            .iter()
+            .find(|c| c["backend"] == "cpu" && c["structure"] == g["structure"] && c["transfer"] == g["transfer"])
+            .expect("its CPU row");
+        assert_eq!(g["samples_per_ray"], cpu["samples_per_ray"], "{what}");
+        assert_eq!(g["visits_per_ray"], cpu["visits_per_ray"], "{what}");
+        assert_eq!(g["dense_timing"].is_null(), g["structure"] == "dense", "{what}");
+    }
+    let skipped = results["skipped"].as_array().expect("the octree's GPU rows are listed");
+    assert!(skipped.iter().all(|k| k["kind"] == "unavailable" && k["structure"] == "octree (gpu)"), "{skipped:?}");
 }

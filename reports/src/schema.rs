@@ -45,6 +45,13 @@ pub struct Results {
     pub volumes: Vec<VolumeCase>,
 }
 
+/// How far a GPU volume image's channel may stray from the CPU's (issue 32).
+pub const VOLUME_GPU_TOLERANCE: f32 = 1e-5;
+
+fn cpu() -> String {
+    "cpu".into()
+}
+
 /// One volume structure casting one volume source under one transfer function (the `volume`
 /// workload, issue 32). Every structure's image is checked against the dense marcher's, which
 /// it must equal bit for bit; its renders are timed in rounds with the dense marcher's, so
@@ -71,6 +78,14 @@ pub struct VolumeCase {
     /// The fraction of 8³ bricks not empty (the same for every structure: the brick map's).
     pub occupied_bricks: f64,
     pub structure: String,
+    /// `cpu`, or `gpu` for the WGSL kernel (timed by the device's timestamps, paired with the
+    /// GPU dense marcher's kernel; checked against the CPU dense image within
+    /// [`VOLUME_GPU_TOLERANCE`] per channel).
+    #[serde(default = "cpu")]
+    pub backend: String,
+    /// The CPU model or GPU adapter.
+    #[serde(default)]
+    pub device: String,
     /// Lattice step along a ray, in the volume's units.
     pub step: f32,
     /// Bytes the structure holds beside the samples (the samples: `dims` × the type's size).
@@ -89,8 +104,12 @@ pub struct VolumeCase {
     pub samples_per_ray: f64,
     /// Bricks or octree nodes visited per ray (0 for the dense marcher).
     pub visits_per_ray: f64,
-    /// Pixels whose RGBA differs from the dense marcher's in any bit (must be 0).
+    /// Pixels whose RGBA differs from the CPU dense marcher's: in any bit on the CPU (must be 0),
+    /// by more than [`VOLUME_GPU_TOLERANCE`] in a channel on the GPU.
     pub mismatched_pixels: u64,
+    /// GPU rows: the largest difference of a channel from the CPU dense image.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub max_difference: Option<f32>,
     /// The image, relative to the run directory (one per source and transfer function: every
     /// structure's image is the same).
     #[serde(skip_serializing_if = "Option::is_none", default)]

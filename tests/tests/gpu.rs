@@ -92,7 +92,7 @@ fn compare(
     shade: &ShadeContext,
     started: Instant,
 ) -> Option<String> {
-    let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+    let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None, ..Default::default() };
     let cpu = render(accel, camera, shade, Workload::Primary);
     let gpu = render_primary(ctx, accel, camera, &opts)
         .unwrap_or_else(|e| panic!("{scene}/{label}: {e}"))
@@ -149,7 +149,8 @@ fn esvo_variants() {
         // The pre-pass must have run: beam starts shorten the main pass's traversal. (Agreement
         // alone cannot tell: a beam buffer left at zero lets every ray start at 0.)
         let steps = |extra: &[&str]| {
-            let opts = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            let opts =
+                DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None, ..Default::default() };
             render_primary(ctx, build(extra).as_ref(), &camera, &opts)
                 .unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"))
                 .and_then(|r| r.steps_per_ray())
@@ -186,7 +187,13 @@ fn svdag_variants() {
             failures.extend(compare(ctx, name, &format!("svdag-{leaves}"), accel.as_ref(), &camera, &shade, t));
             let words = accel.memory().total_bytes() / 4;
             let chunk = (words as usize).div_ceil(8).max(64);
-            let split = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: Some(chunk) };
+            let split = DispatchOptions {
+                warmup: 0,
+                reps: 1,
+                count_steps: false,
+                split_words: Some(chunk),
+                ..Default::default()
+            };
             let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
             let gpu = render_primary(ctx, accel.as_ref(), &camera, &split)
                 .unwrap_or_else(|e| panic!("{name} {leaves} split: {e}"))
@@ -224,7 +231,8 @@ fn svdag_temporal_frames() {
         for f in 0..4 {
             let view = accel.frame(f).expect("a frame");
             failures.extend(compare(ctx, name, &format!("frame-{f}"), view.as_ref(), &camera, &shade, t));
-            let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+            let opts =
+                DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None, ..Default::default() };
             let gpu = render_primary(ctx, view.as_ref(), &camera, &opts).expect("renders").expect("a GPU program");
             let d = diff(&gpu.frame, &render(view.as_ref(), &camera, &shade, Workload::Primary));
             if d.hit_mismatches > 0 || d.prim_mismatches > 0 {
@@ -272,7 +280,8 @@ fn voxel_grid_variants() {
             let words = accel.memory().total_bytes() / 4;
             let chunk = (words as usize).div_ceil(5).max(64);
             // The same DDA on both sides: the same steps per ray (within rounding on a real GPU).
-            let counted = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            let counted =
+                DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None, ..Default::default() };
             let gpu_steps = render_primary(ctx, accel.as_ref(), &camera, &counted)
                 .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
                 .and_then(|r| r.steps_per_ray())
@@ -287,7 +296,8 @@ fn voxel_grid_variants() {
                 ));
             }
             for split_words in [None, Some(chunk)] {
-                let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words };
+                let opts =
+                    DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words, ..Default::default() };
                 let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
                     .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
                     .expect("a GPU program");
@@ -329,7 +339,8 @@ fn kdtree_and_octree_variants() {
             let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
             let accel = (entry.build)(&input).unwrap_or_else(|e| panic!("{name} {extra:?}: {e}"));
             failures.extend(compare(ctx, name, label, accel.as_ref(), &camera, &shade, t));
-            let opts = DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None };
+            let opts =
+                DispatchOptions { warmup: 0, reps: 0, count_steps: true, split_words: None, ..Default::default() };
             let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)
                 .unwrap_or_else(|e| panic!("{name} {label}: {e}"))
                 .and_then(|r| r.steps_per_ray())
@@ -379,7 +390,7 @@ fn ties_go_to_the_smaller_index_on_the_gpu() {
         let params = Params::default();
         let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
         let accel = kernels::build_structure(name, &input).expect("registered").expect("builds");
-        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None };
+        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: None, ..Default::default() };
         let shade = ShadeContext::for_scene(&scene, 0);
         let cpu = render(accel.as_ref(), &camera, &shade, Workload::Primary);
         let gpu = render_primary(ctx, accel.as_ref(), &camera, &opts)

@@ -64,7 +64,7 @@ mod tests {
         };
         let gpu_rays: Vec<GpuRay> = rays.iter().map(|(r, t0, t1)| GpuRay::new(r, *t0, *t1)).collect();
         let frame = FrameUniform::rays_only(gpu_rays.len() as u32);
-        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: true, split_words: None };
+        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: true, split_words: None, ..Default::default() };
         let program = program(bvh).expect("a program");
         let run = run_program(ctx, &program, &gpu_rays, &frame, &opts).expect("runs");
         let mut hits = 0;

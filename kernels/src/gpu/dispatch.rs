@@ -37,11 +37,14 @@ pub struct DispatchOptions {
     /// Largest binding, in words; `None`: the device's storage-binding and buffer limits. Tests
     /// force tiny values to exercise the split accessors.
     pub split_words: Option<usize>,
+    /// Read the `scratch` buffer back after the last run ([`GpuRun::scratch`]): for kernels
+    /// whose answer is more than a hit (the volume kernel's RGBA per ray).
+    pub read_scratch: bool,
 }
 
 impl Default for DispatchOptions {
     fn default() -> Self {
-        Self { warmup: 1, reps: 5, count_steps: false, split_words: None }
+        Self { warmup: 1, reps: 5, count_steps: false, split_words: None, read_scratch: false }
     }
 }
 
@@ -114,6 +117,8 @@ pub struct GpuRun {
     /// Pre-pass time of each timed rep (empty without a pre-pass or without timestamps).
     pub prepass_ms: Vec<f64>,
     pub timer: Timer,
+    /// The `scratch` buffer's words after the last run, when [`DispatchOptions::read_scratch`].
+    pub scratch: Vec<u32>,
 }
 
 /// Runs `program` over `rays` (`frame.ray_count` of them) as [`DispatchOptions`] says.
@@ -279,7 +284,8 @@ impl<'a> Runner<'a> {
         let ray_buffer = init("rays", ray_words, storage);
         let frame_buffer = init("frame", bytemuck::bytes_of(frame), wgpu::BufferUsages::UNIFORM);
         let scratch_bytes = self.program.scratch_words.max(1) as u64 * 4;
-        let scratch = self.buffer("scratch", scratch_bytes, storage);
+        let scratch_usage = if self.opts.read_scratch { storage | wgpu::BufferUsages::COPY_SRC } else { storage };
+        let scratch = self.buffer("scratch", scratch_bytes, scratch_usage);
         let hits_bytes = n.max(1) * HIT_BYTES;
         let hits = self.buffer("hits", hits_bytes, storage | wgpu::BufferUsages::COPY_SRC);
         queue.submit([]);
@@ -308,6 +314,7 @@ impl<'a> Runner<'a> {
             bindings: self.asm.chunks.len(),
             kernel_ms: Vec::new(),
             prepass_ms: Vec::new(),
+            scratch: Vec::new(),
             timer: if self.ctx.timestamps { Timer::Timestamps } else { Timer::WallClock },
         };
         if let Some(pipelines) = &self.timed {
@@ -323,6 +330,9 @@ impl<'a> Runner<'a> {
                 run.hits = counted.clone();
             }
             run.counted = Some(counted);
+        }
+        if self.opts.read_scratch {
+            run.scratch = bytemuck::pod_collect_to_vec(&self.read_back(&scratch, scratch_bytes)?);
         }
         Ok(run)
     }
@@ -430,12 +440,17 @@ impl<'a> Runner<'a> {
 
     /// Copies `hits` to a mappable buffer and reads it back.
     fn read_hits(&self, hits: &wgpu::Buffer, bytes: u64, n: u64) -> Result<Vec<GpuHit>, GpuError> {
-        let read = self.buffer("hits read", bytes, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ);
-        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(hits, 0, &read, 0, bytes);
-        self.ctx.queue.submit([encoder.finish()]);
-        let words: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&self.map_read(&read)?);
+        let words: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&self.read_back(hits, bytes)?);
         Ok(words.into_iter().take(n as usize).map(GpuHit::from_words).collect())
+    }
+
+    /// Copies the first `bytes` of `buffer` (after everything submitted so far) to the host.
+    fn read_back(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+        let read = self.buffer("readback", bytes, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &read, 0, bytes);
+        self.ctx.queue.submit([encoder.finish()]);
+        self.map_read(&read)
     }
 
     /// Maps `buffer` (after everything submitted so far) and copies its bytes out.

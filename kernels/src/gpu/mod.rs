@@ -18,6 +18,8 @@
 //! (`cwbvh`), Ylitie et al.'s compressed-wide-BVH traversal over the obvhs crate's own node words
 //! with the crate's Möller–Trumbore test (the GPU row of the `cwbvh` reference). Voxel kernels
 //! return the hit's `t` and Morton code; like the triangle kernels they read no shading attributes.
+//! `volume.wgsl` ([`volume`]) casts scalar volumes (the dense marcher and the brick map), its RGBA
+//! per ray read back from the scratch buffer.
 
 pub(crate) mod bvh;
 pub(crate) mod cwbvh;
@@ -30,6 +32,7 @@ pub mod rays;
 pub mod render;
 #[cfg(test)]
 mod tests;
+pub mod volume;
 pub(crate) mod voxel;
 pub(crate) mod wide;
 

@@ -56,7 +56,8 @@ fn split_buffers_read_every_word_across_chunk_boundaries() {
     let frame = FrameUniform::rays_only(rays.len() as u32);
     // Split 3 gives 21 bindings, within the 32 storage buffers per stage lavapipe offers.
     for split in [3, 4, 5, 16, 1 << 20] {
-        let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: Some(split) };
+        let opts =
+            DispatchOptions { warmup: 0, reps: 1, count_steps: false, split_words: Some(split), ..Default::default() };
         let run = run_program(ctx, &probe(&a, &b, false), &rays, &frame, &opts).expect("runs");
         assert_eq!(run.bindings, a.len().div_ceil(split) + b.len().div_ceil(split), "split {split}");
         for (hit, &(i, j)) in run.hits.iter().zip(&all) {
@@ -79,7 +80,7 @@ fn counted_run_counts_steps_and_matches_the_timed_run() {
     let mut program = probe(&a, &b, true);
     program.prepass = Some(PrePass { entry: "fill", invocations: rays.len() as u32 });
     program.scratch_words = rays.len();
-    let opts = DispatchOptions { warmup: 1, reps: 5, count_steps: true, split_words: None };
+    let opts = DispatchOptions { warmup: 1, reps: 5, count_steps: true, split_words: None, ..Default::default() };
     let run = run_program(ctx, &program, &rays, &frame, &opts).expect("runs");
     let counted = run.counted.as_ref().expect("counted run");
     assert_eq!(run.kernel_ms.len(), 5);

@@ -81,6 +81,11 @@ impl Bricks {
         (self.ranges.len() * size_of::<(f32, f32)>() + self.empty.len()) as u64
     }
 
+    /// Voxel cells per axis: the domain's extent in cells, which the last brick may not fill.
+    pub fn cells(&self) -> [u32; 3] {
+        self.cells
+    }
+
     /// The position of brick face `i` on axis `a` (the domain's far side past the last brick).
     #[inline]
     pub(super) fn face(&self, a: usize, i: u32) -> f32 {
@@ -99,6 +104,10 @@ impl VolumeStructure for Bricks {
 
     fn occupancy(&self) -> Option<f64> {
         Some(Bricks::occupancy(self))
+    }
+
+    fn as_bricks(&self) -> Option<&Bricks> {
+        Some(self)
     }
 }
 

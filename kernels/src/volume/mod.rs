@@ -327,6 +327,10 @@ pub trait VolumeStructure: VolumeMarch + Send {
     fn bytes(&self) -> u64;
     /// The fraction of its bricks that are not empty; `None` for a structure without bricks.
     fn occupancy(&self) -> Option<f64>;
+    /// The structure as a brick map, for the GPU kernel's brick walk; `None` for any other.
+    fn as_bricks(&self) -> Option<&bricks::Bricks> {
+        None
+    }
 }
 
 /// A volume structure by name: what `harness list` shows and how to build it.

@@ -1,0 +1,133 @@
+//! The volume workload on the GPU (issue 32): `volume.wgsl`, the WGSL twin of
+//! [`crate::volume`]'s dense marcher and brick map, over the volume's samples as stored (`u8`
+//! four to a word, `u16` two, `f32` one). The min/max octree has no GPU kernel yet: its recursive
+//! visit needs an explicit stack in WGSL ([`GpuVolume::of`] says so).
+
+use std::borrow::Cow;
+
+use scenes::{Camera, Samples, Volume};
+
+use super::program::{GpuBuffer, GpuProgram};
+use super::rays::{FrameUniform, primary_rays};
+use super::{DispatchOptions, GpuContext, GpuError, GpuRun, run_program};
+use crate::cpu::render::Frame;
+use crate::volume::bricks::Bricks;
+use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
+
+pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.wgsl"));
+
+/// Which of the volume kernel's walks a structure uses.
+pub enum GpuVolume<'a> {
+    Dense,
+    Bricks(&'a Bricks),
+}
+
+impl<'a> GpuVolume<'a> {
+    /// The GPU walk of the volume structure `name` built as `structure`; an error for one
+    /// without a GPU kernel.
+    pub fn of(name: &str, structure: &'a dyn VolumeStructure) -> Result<Self, String> {
+        match name {
+            "dense" => Ok(GpuVolume::Dense),
+            "bricks" => structure
+                .as_bricks()
+                .map(GpuVolume::Bricks)
+                .ok_or_else(|| "the bricks entry built no brick map".to_string()),
+            other => Err(format!("'{other}' has no GPU kernel yet (the dense marcher and the brick map do)")),
+        }
+    }
+}
+
+/// A GPU volume render: the image (as the CPU's [`crate::volume::render`] returns it) and the
+/// dispatch's record (kernel times, upload).
+pub struct GpuVolumeRender {
+    pub image: VolumeImage,
+    pub run: GpuRun,
+}
+
+/// `header`'s header words before the transfer function's points (`M_TF` in volume.wgsl).
+const HEADER_WORDS: usize = 32;
+
+/// Casts `camera`'s rays through `volume` with `walk` on the GPU, sampling every `step` under
+/// `tf`.
+pub fn render_volume(
+    ctx: &GpuContext,
+    volume: &Volume,
+    walk: &GpuVolume,
+    tf: &TransferFunction,
+    camera: &Camera,
+    step: f32,
+    opts: &DispatchOptions,
+) -> Result<GpuVolumeRender, GpuError> {
+    let label = "volume";
+    if volume.voxel_count() > u64::from(u32::MAX) {
+        return Err(GpuError::Limit {
+            label: label.into(),
+            what: "voxels (the kernel indexes them with 32 bits)",
+            needed: volume.voxel_count(),
+            allowed: u64::from(u32::MAX),
+        });
+    }
+    let f = f32::to_bits;
+    let mut header = vec![0u32; HEADER_WORDS];
+    header[0] = match volume.samples {
+        Samples::U8(_) => 0,
+        Samples::U16(_) => 1,
+        Samples::F32(_) => 2,
+    };
+    header[1..4].copy_from_slice(&volume.dims);
+    header[4..7].copy_from_slice(&volume.spacing.map(f));
+    header[7..10].copy_from_slice(&volume.spacing.map(|s| f(1.0 / s)));
+    header[10] = f(step);
+    header[18] = tf.points().len() as u32;
+    header[19..22].copy_from_slice(&volume.bounds().max.to_array().map(f));
+    let mut empty = Vec::new();
+    if let GpuVolume::Bricks(bricks) = walk {
+        header[11] = 1;
+        header[12..15].copy_from_slice(&bricks.res);
+        header[15..18].copy_from_slice(&bricks.cells());
+        empty = vec![0u32; bricks.empty.len().div_ceil(32)];
+        for (i, _) in bricks.empty.iter().enumerate().filter(|(_, e)| **e) {
+            empty[i / 32] |= 1 << (i % 32);
+        }
+    }
+    for &(value, rgba) in tf.points() {
+        header.push(f(value));
+        header.extend(rgba.map(f));
+    }
+    let samples: Cow<[u32]> = match &volume.samples {
+        Samples::U8(v) => {
+            Cow::Owned(v.chunks(4).map(|c| c.iter().rev().fold(0u32, |w, &b| w << 8 | u32::from(b))).collect())
+        }
+        Samples::U16(v) => {
+            Cow::Owned(v.chunks(2).map(|c| c.iter().rev().fold(0u32, |w, &b| w << 16 | u32::from(b))).collect())
+        }
+        Samples::F32(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
+    };
+    let rays = primary_rays(camera);
+    let program = GpuProgram {
+        label,
+        wgsl: WGSL,
+        buffers: vec![
+            GpuBuffer { name: "vol", words: samples },
+            GpuBuffer { name: "header", words: Cow::Owned(header) },
+            GpuBuffer { name: "empty", words: Cow::Owned(empty) },
+        ],
+        prepass: None,
+        scratch_words: 4 * rays.len(),
+    };
+    let frame = FrameUniform::of_camera(camera, rays.len() as u32);
+    let opts = DispatchOptions { read_scratch: true, ..opts.clone() };
+    let run = run_program(ctx, &program, &rays, &frame, &opts)?;
+    let (w, h) = (camera.width, camera.height);
+    let mut image = VolumeImage { width: w, height: h, rgba: vec![[0.0; 4]; (w * h) as usize], samples: 0, visits: 0 };
+    for (i, hit) in run.hits.iter().enumerate() {
+        let (x, y) = Frame::pixel_of(w, i);
+        if x < w && y < h {
+            let words = &run.scratch[4 * i..4 * i + 4];
+            image.rgba[(y * w + x) as usize] = std::array::from_fn(|c| f32::from_bits(words[c]));
+            image.samples += hit.prim & 0xffff_ffff;
+            image.visits += hit.prim >> 32;
+        }
+    }
+    Ok(GpuVolumeRender { image, run })
+}

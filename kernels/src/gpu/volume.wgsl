@@ -1,0 +1,235 @@
+// Volume ray casting (issue 32), the WGSL twin of kernels/src/volume: front-to-back
+// emission–absorption compositing through a piecewise-linear transfer function, samples on the
+// global lattice t_k = k · step, trilinear reads, early termination below MIN_TRANSMITTANCE; the
+// dense marcher (mode 0) or the brick map's DDA over its empty bricks (mode 1). Every operation is
+// the CPU's in the CPU's order, so a device that rounds as the CPU does (lavapipe) gives the CPU's
+// image.
+//
+// Buffers (kernels/src/gpu/volume.rs): `vol` the samples packed into words (u8: four a word, u16:
+// two, f32: one, x fastest); `header` the header below, then the transfer function's points, five
+// words each (value, r, g, b, a); `empty` one bit per brick (mode 1).
+//
+// The answer per ray: premultiplied RGB and opacity 1 − T as four f32 words in `scratch` at
+// 4 · index; the hit's prim words carry the samples taken and the bricks visited.
+
+const MIN_TRANSMITTANCE: f32 = 0.005;
+const BRICK: u32 = 8u;
+
+// `header` words.
+const M_KIND: u32 = 0u;        // 0 u8, 1 u16, 2 f32
+const M_DIMS: u32 = 1u;        // 3 words
+const M_SPACING: u32 = 4u;     // 3 f32
+const M_INV_SPACING: u32 = 7u; // 3 f32, 1 / spacing as the CPU rounds it
+const M_STEP: u32 = 10u;       // f32
+const M_MODE: u32 = 11u;       // 0 dense, 1 bricks
+const M_BRICKS: u32 = 12u;     // 3 words: bricks per axis
+const M_CELLS: u32 = 15u;      // 3 words: voxel cells per axis
+const M_POINTS: u32 = 18u;     // transfer-function points
+const M_DOMAIN: u32 = 19u;     // 3 f32: the far corner of the voxel centres' box
+const M_TF: u32 = 32u;         // first point
+
+fn header_f(i: u32) -> f32 {
+    return bitcast<f32>(header(i));
+}
+
+fn header_v3(i: u32) -> vec3<f32> {
+    return vec3<f32>(header_f(i), header_f(i + 1u), header_f(i + 2u));
+}
+
+fn dims() -> vec3<u32> {
+    return vec3<u32>(header(M_DIMS), header(M_DIMS + 1u), header(M_DIMS + 2u));
+}
+
+// Voxel (x, y, z) as f32: scenes::Volume::value.
+fn voxel(x: u32, y: u32, z: u32) -> f32 {
+    let d = dims();
+    let i = x + d.x * (y + d.y * z);
+    switch header(M_KIND) {
+        case 0u: {
+            return f32((vol(i / 4u) >> (8u * (i % 4u))) & 0xffu);
+        }
+        case 1u: {
+            return f32((vol(i / 2u) >> (16u * (i % 2u))) & 0xffffu);
+        }
+        default: {
+            return bitcast<f32>(vol(i));
+        }
+    }
+}
+
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    return a + (b - a) * t;
+}
+
+// The trilinear read at p: kernels::volume::Sampler::value.
+fn sample_at(p: vec3<f32>) -> f32 {
+    let last = dims() - vec3<u32>(1u);
+    let inv = header_v3(M_INV_SPACING);
+    var c: vec3<u32>;
+    var f: vec3<f32>;
+    for (var a = 0u; a < 3u; a++) {
+        let u = p[a] * inv[a];
+        var cell = 0u;
+        if (last[a] != 0u) {
+            cell = u32(clamp(u, 0.0, f32(last[a] - 1u)));
+        }
+        c[a] = cell;
+        f[a] = clamp(u - f32(cell), 0.0, 1.0);
+    }
+    let c1 = min(c + vec3<u32>(1u), last);
+    let x00 = lerp(voxel(c.x, c.y, c.z), voxel(c1.x, c.y, c.z), f.x);
+    let x10 = lerp(voxel(c.x, c1.y, c.z), voxel(c1.x, c1.y, c.z), f.x);
+    let x01 = lerp(voxel(c.x, c.y, c1.z), voxel(c1.x, c.y, c1.z), f.x);
+    let x11 = lerp(voxel(c.x, c1.y, c1.z), voxel(c1.x, c1.y, c1.z), f.x);
+    return lerp(lerp(x00, x10, f.y), lerp(x01, x11, f.y), f.z);
+}
+
+fn tf_value(k: u32) -> f32 {
+    return header_f(M_TF + 5u * k);
+}
+
+fn tf_rgba(k: u32) -> vec4<f32> {
+    let at = M_TF + 5u * k + 1u;
+    return vec4<f32>(header_f(at), header_f(at + 1u), header_f(at + 2u), header_f(at + 3u));
+}
+
+// The transfer function at v: kernels::volume::TransferFunction::eval.
+fn transfer(v: f32) -> vec4<f32> {
+    let n = header(M_POINTS);
+    var i = 0u;
+    while (i < n && tf_value(i) <= v) {
+        i += 1u;
+    }
+    if (i == 0u) {
+        return tf_rgba(0u);
+    }
+    if (i == n) {
+        return tf_rgba(n - 1u);
+    }
+    let x0 = tf_value(i - 1u);
+    let x1 = tf_value(i);
+    let c0 = tf_rgba(i - 1u);
+    let c1 = tf_rgba(i);
+    let f = (v - x0) / (x1 - x0);
+    return vec4<f32>(c0.x + (c1.x - c0.x) * f, c0.y + (c1.y - c0.y) * f, c0.z + (c1.z - c0.z) * f, c0.w + (c1.w - c0.w) * f);
+}
+
+// One ray's compositing: kernels::volume::Compositor.
+struct Compositor {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    rgb: vec3<f32>,
+    transmittance: f32,
+    samples: u32,
+    visits: u32,
+}
+
+// The lattice samples of [t_a, t_b), front to back (Compositor::take with samples_in's k range);
+// false once the ray has terminated.
+fn take(c: ptr<function, Compositor>, t_a: f32, t_b: f32) -> bool {
+    let step = header_f(M_STEP);
+    let k_end = i32(ceil(t_b / step));
+    for (var k = i32(ceil(t_a / step)); k < k_end; k++) {
+        let t = f32(k) * step;
+        let rgba = transfer(sample_at((*c).origin + (*c).dir * t));
+        (*c).samples += 1u;
+        if (rgba.w > 0.0) {
+            let w = (*c).transmittance * rgba.w;
+            (*c).rgb = vec3<f32>((*c).rgb.x + w * rgba.x, (*c).rgb.y + w * rgba.y, (*c).rgb.z + w * rgba.z);
+            (*c).transmittance *= 1.0 - rgba.w;
+            if ((*c).transmittance < MIN_TRANSMITTANCE) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+// The position of brick face i on axis a: kernels::volume::bricks::Bricks::face.
+fn brick_face(a: u32, i: u32) -> f32 {
+    return f32(min(i * BRICK, header(M_CELLS + a))) * header_f(M_SPACING + a);
+}
+
+fn brick_empty(index: u32) -> bool {
+    return ((empty(index / 32u) >> (index % 32u)) & 1u) != 0u;
+}
+
+// The brick map's DDA: kernels::volume::bricks's march, span for span.
+fn march_bricks(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
+    let o = ray.origin;
+    let d = ray.dir + vec3<f32>(0.0);
+    let inv = reciprocal(ray.dir);
+    let p = ray.origin + ray.dir * t0;
+    let res = vec3<u32>(header(M_BRICKS), header(M_BRICKS + 1u), header(M_BRICKS + 2u));
+    let spacing = header_v3(M_SPACING);
+    var cell: vec3<u32>;
+    var step = vec3<i32>(0);
+    var t_next = vec3<f32>(f32_inf());
+    for (var a = 0u; a < 3u; a++) {
+        let u = p[a] / (spacing[a] * f32(BRICK));
+        cell[a] = u32(clamp(u, 0.0, f32(res[a] - 1u)));
+        if (abs(inv[a]) <= F32_MAX && d[a] != 0.0) {
+            var face = cell[a];
+            if (d[a] > 0.0) {
+                step[a] = 1;
+                face = cell[a] + 1u;
+            } else {
+                step[a] = -1;
+            }
+            t_next[a] = (brick_face(a, face) - o[a]) * inv[a];
+        }
+    }
+    var t_in = t0;
+    var guard = 0u;
+    loop {
+        if (!next_step(&guard)) {
+            return;
+        }
+        var a = 0u;
+        var t_exit = f32_inf();
+        for (var b = 0u; b < 3u; b++) {
+            if (t_next[b] < t_exit) {
+                a = b;
+                t_exit = t_next[b];
+            }
+        }
+        let t_out = min(t_exit, t1);
+        let index = cell.x + res.x * (cell.y + res.y * cell.z);
+        (*c).visits += 1u;
+        if (t_out > t_in && !brick_empty(index) && !take(c, t_in, t_out)) {
+            return;
+        }
+        if (t_out >= t1) {
+            return;
+        }
+        t_in = max(t_in, t_out);
+        let next = i32(cell[a]) + step[a];
+        if (next < 0 || next >= i32(res[a])) {
+            take(c, t_in, t1);
+            return;
+        }
+        cell[a] = u32(next);
+        var face = cell[a];
+        if (step[a] > 0) {
+            face = cell[a] + 1u;
+        }
+        t_next[a] = (brick_face(a, face) - o[a]) * inv[a];
+    }
+}
+
+fn trace(ray: Ray, index: u32) -> TraceResult {
+    var c = Compositor(ray.origin, ray.dir, vec3<f32>(0.0), 1.0, 0u, 0u);
+    let span = slab_span(ray.origin, reciprocal(ray.dir), vec3<f32>(0.0), header_v3(M_DOMAIN), 0.0, f32_inf());
+    if (enters(span)) {
+        if (header(M_MODE) == 0u) {
+            take(&c, span.x, span.y);
+        } else {
+            march_bricks(&c, ray, span.x, span.y);
+        }
+    }
+    scratch[4u * index] = bitcast<u32>(c.rgb.x);
+    scratch[4u * index + 1u] = bitcast<u32>(c.rgb.y);
+    scratch[4u * index + 2u] = bitcast<u32>(c.rgb.z);
+    scratch[4u * index + 3u] = bitcast<u32>(1.0 - c.transmittance);
+    return TraceResult(true, 0.0, c.samples, c.visits);
+}
