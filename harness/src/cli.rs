@@ -147,11 +147,12 @@ pub enum Preset {
     /// renders three times. Long: about 40 minutes and 9 GB on 2 cores.
     VoxelGrids,
     /// Seed 003's volumes (issue 32): the MRI scans (where mricron-data is installed),
-    /// Marschner–Lobb at 256³ and sparse particle fields at 1024³ and 2048³, cast front to back
-    /// through the dense marcher, the brick map and the min/max octree at 1024×1024, under
-    /// transfer functions fitted to 1, 10, 30 and 100 % visible voxels: speed-up over the dense
-    /// marcher against occupancy, samples and node visits per ray, bytes, build and
-    /// transfer-function update times, every image checked bit for bit against the dense one.
+    /// Marschner–Lobb at 256³, the dragon as fog at 512³ and sparse particle fields at 1024³ and
+    /// 2048³, cast front to back through the dense marcher, the brick map and the min/max octree
+    /// at 1024×1024, under transfer functions fitted to 1, 10, 30 and 100 % visible voxels:
+    /// speed-up over the dense marcher against occupancy, samples and node visits per ray, bytes,
+    /// build and transfer-function update times, every image checked bit for bit against the
+    /// dense one.
     Volume,
     /// Every reproduction of docs/design.md §9 in one run and one report, which opens with "Paper
     /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,

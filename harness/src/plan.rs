@@ -55,10 +55,17 @@ pub struct PartPlan {
 const QUICK_SCENES: &[&str] = &["bunny", "teapot", "dragon-11k", "menger", "flat"];
 
 /// The volume preset's sources (issue 32): the MRI scans where mricron-data is installed, the
-/// Marschner–Lobb signal, and particle fields whose blob counts keep about the same density
-/// (particles@512:3000 covers 14 % of its bricks at a mid cut) at 1024³ and at 2048³ (8 GiB).
-pub const VOLUME_SOURCES: &[&str] =
-    &["mri-ch2", "mri-ch2better", "marschner-lobb@256", "particles@1024:24000", "particles@2048:192000"];
+/// Marschner–Lobb signal, the dragon as fog, and particle fields whose blob counts keep about the
+/// same density (particles@512:3000 covers 14 % of its bricks at a mid cut) at 1024³ and at 2048³
+/// (8 GiB).
+pub const VOLUME_SOURCES: &[&str] = &[
+    "mri-ch2",
+    "mri-ch2better",
+    "marschner-lobb@256",
+    "fog@dragon:512",
+    "particles@1024:24000",
+    "particles@2048:192000",
+];
 
 /// The voxel-grids preset's levels: 1024³ … 8192³.
 const VOXEL_GRID_LEVELS: std::ops::RangeInclusive<u32> = 10..=13;

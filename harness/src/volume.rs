@@ -40,8 +40,8 @@ pub const PARAMS: &[(&str, &str)] = &[
 /// least one round runs): a dense pass through a 2048³ field takes tens of seconds.
 const ROUND_BUDGET_MS: f64 = 60_000.0;
 
-/// A warm-up round whose dense render takes this long is kept as a timed round: the one-time
-/// costs a warm-up absorbs are well under 1 % of it.
+/// A warm-up round whose dense render takes this long is kept as a timed round, and a build this
+/// long is timed once: the one-time costs a warm-up absorbs are well under 1 % of it.
 const LONG_RENDER_MS: f64 = 1_000.0;
 
 /// Whether the run is a volume run: the `volume` preset or workload, or only volume sources named.
@@ -492,7 +492,10 @@ struct Rounds {
     times: Vec<Vec<f64>>,
 }
 
-/// Builds `entry` `build_warmup + build_reps` times (at least once timed); keeps the last.
+/// Builds `entry` `build_warmup + build_reps` times (at least once timed); keeps the last. A
+/// build of [`LONG_RENDER_MS`] or more, warm-up or not, ends the series as its one timed sample:
+/// a 2048³ field's brick ranges take half a minute to gather, and a second pass over the same
+/// samples tells little more.
 fn timed_builds(
     entry: &'static volume::VolumeEntry,
     volume: &Volume,
@@ -506,12 +509,16 @@ fn timed_builds(
         let t = Instant::now();
         let built = (entry.build)(volume, tf);
         let ms = ms_since(t);
-        let timed = rep >= plan.build_warmup;
+        let long = ms >= LONG_RENDER_MS;
+        let timed = rep >= plan.build_warmup || long;
         phases::add_ms(if timed { Phase::TimedBuilds } else { Phase::UntimedBuilds }, ms);
         if timed {
             samples.push(ms);
         }
         last = Some(built);
+        if long {
+            break;
+        }
     }
     Ok((last.context("at least one build")?, Timing::from_samples(&samples)))
 }

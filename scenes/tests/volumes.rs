@@ -230,3 +230,65 @@ fn the_particle_field_is_sparse_deterministic_and_fills_with_its_count() {
     }
     assert!(matches!(load_volume("particles@4096:10", BUDGET), Err(SceneError::TooLarge { .. })));
 }
+
+/// The point–triangle distance against a dense sampling of the triangle: never more than the
+/// nearest sample, and within the sampling's spacing of it; points in every Voronoi region
+/// (beyond each vertex, beside each edge, over the face).
+#[test]
+fn the_distance_to_a_triangle_is_to_its_closest_point() {
+    use glam::Vec3;
+    use scenes::volume::fog::distance;
+    let t = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(4.0, 0.5, 0.0), Vec3::new(1.0, 3.0, 1.0)];
+    let steps = 400;
+    let samples: Vec<Vec3> = (0..=steps)
+        .flat_map(|i| (0..=steps - i).map(move |j| (i as f32 / steps as f32, j as f32 / steps as f32)))
+        .map(|(u, v)| t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v)
+        .collect();
+    let mut state = 7u32;
+    let mut next = move || {
+        state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (state >> 8) as f32 / (1u32 << 24) as f32 * 12.0 - 4.0
+    };
+    let spacing = 5.0 / steps as f32;
+    for _ in 0..2000 {
+        let p = Vec3::new(next(), next(), next());
+        let d = distance(p, &t);
+        let nearest = samples.iter().map(|s| (p - *s).length()).fold(f32::INFINITY, f32::min);
+        assert!(d <= nearest + 1e-4, "{p}: {d} > {nearest}");
+        assert!(nearest - d <= spacing, "{p}: {d} against {nearest}");
+    }
+}
+
+/// `fog@SCENE:N`: every voxel's density is what the distance to the nearest of all the scene's
+/// triangles gives (brute force over every triangle for every voxel), the surface's voxels dense
+/// and the far ones empty; a bad recipe and a lattice past the budget are refused.
+#[test]
+fn a_fog_volume_is_the_density_of_the_distance_to_the_surface() {
+    use glam::Vec3;
+    use scenes::volume::fog::{MARGIN, density_at, distance};
+    let n = 28u32;
+    let v = load_volume("fog@teapot:28", 1 << 30).expect("builds");
+    assert_eq!(v.dims, [n; 3]);
+    let scene = scenes::load_scene("teapot").expect("teapot");
+    let b = scene.bounds();
+    let voxel = (b.max - b.min).max_element() / (n as f32 - 1.0 - 2.0 * MARGIN);
+    let grid: Vec<[Vec3; 3]> =
+        scene.triangles().iter().map(|t| t.map(|p| (p - b.min) / voxel + Vec3::splat(MARGIN))).collect();
+    let mut dense = 0;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = Vec3::new(x as f32, y as f32, z as f32);
+                let expected = grid.iter().map(|t| density_at(distance(p, t))).max().unwrap_or(0);
+                assert_eq!(v.value(x, y, z), f32::from(expected), "voxel {x} {y} {z}");
+                dense += usize::from(expected > 128);
+            }
+        }
+    }
+    assert!(dense > 50, "{dense} voxels near the surface");
+    assert_eq!(v.value(0, 0, 0), 0.0, "the margin is empty");
+    assert!(matches!(load_volume("fog@teapot", 1 << 30), Err(SceneError::UnknownScene { .. })));
+    assert!(matches!(load_volume("fog@teapot:4", 1 << 30), Err(SceneError::UnknownScene { .. })));
+    assert!(matches!(load_volume("fog@teapot:4096", 1 << 20), Err(SceneError::TooLarge { .. })));
+    assert!(load_volume("fog@no-such-scene:64", 1 << 30).is_err());
+}

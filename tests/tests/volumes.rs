@@ -231,10 +231,11 @@ fn transfer_functions_parse_what_they_describe_and_refuse_bad_text() {
     }
 }
 
-/// The WGSL kernel (dense marcher and brick walk) against the CPU's images, on `u8`, `u16` and
-/// `f32` sources under transfer functions from nothing empty to 1 % visible, from outside and
-/// inside: every channel within 1e-5, the same samples and brick visits. On a device that rounds
-/// as the CPU does (lavapipe), the images are bit for bit the same.
+/// The WGSL kernel (dense marcher, brick walk, octree walk) against the CPU's images, on `u8`,
+/// `u16` and `f32` sources under transfer functions from nothing empty to 1 % visible, from
+/// outside and inside: every channel within 1e-5; the dense and brick walks with the CPU's samples
+/// and brick visits, the octree's (its own spans) with no more samples than the dense marcher. On
+/// a device that rounds as the CPU does (lavapipe), the images are bit for bit the same.
 #[test]
 fn the_gpu_kernel_gives_the_cpu_image() {
     use kernels::gpu::volume::{GpuVolume, render_volume};
@@ -257,10 +258,13 @@ fn the_gpu_kernel_gives_the_cpu_image() {
         let step = volume.spacing[0] * 0.5;
         for (tf_name, tf) in transfer_functions(volume).into_iter().filter(|(n, _)| !n.starts_with("ramp 60")) {
             let bricks = Bricks::build(volume, &tf);
+            let octree = MinMaxOctree::build(volume, &tf);
             for (cam_name, camera) in cameras(volume) {
+                let dense = render(&Dense, volume, &tf, &camera, step);
                 for (name, walk, cpu) in [
-                    ("dense", GpuVolume::Dense, render(&Dense, volume, &tf, &camera, step)),
+                    ("dense", GpuVolume::Dense, dense.clone()),
                     ("bricks", GpuVolume::Bricks(&bricks), render(&bricks, volume, &tf, &camera, step)),
+                    ("octree", GpuVolume::Octree(&octree), render(&octree, volume, &tf, &camera, step)),
                 ] {
                     let what = format!("{} {tf_name} {cam_name} {name}", volume.name);
                     let gpu = render_volume(ctx, volume, &walk, &tf, &camera, step, &opts).expect(&what).image;
@@ -271,7 +275,11 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                         .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
                         .fold(0.0f32, f32::max);
                     assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
-                    assert_eq!((gpu.samples, gpu.visits), (cpu.samples, cpu.visits), "{what}");
+                    if name == "octree" {
+                        assert!(gpu.samples <= dense.samples && gpu.visits > 0, "{what}");
+                    } else {
+                        assert_eq!((gpu.samples, gpu.visits), (cpu.samples, cpu.visits), "{what}");
+                    }
                     if exact {
                         assert_eq!(bits(&gpu), bits(&cpu), "{what}: lavapipe rounds as the CPU does");
                     }

@@ -1,7 +1,8 @@
 //! The volume workload on the GPU (issue 32): `volume.wgsl`, the WGSL twin of
-//! [`crate::volume`]'s dense marcher and brick map, over the volume's samples as stored (`u8`
-//! four to a word, `u16` two, `f32` one). The min/max octree has no GPU kernel yet: its recursive
-//! visit needs an explicit stack in WGSL ([`GpuVolume::of`] says so).
+//! [`crate::volume`]'s dense marcher, brick map and min/max octree, over the volume's samples as
+//! stored (`u8` four to a word, `u16` two, `f32` one). The octree's walk descends from the root at
+//! each span's start instead of recursing (see volume.wgsl): the same samples and image, other
+//! spans, so its samples and visits per ray are its own.
 
 use std::borrow::Cow;
 
@@ -12,6 +13,7 @@ use super::rays::{FrameUniform, primary_rays};
 use super::{DispatchOptions, GpuContext, GpuError, GpuRun, run_program};
 use crate::cpu::render::Frame;
 use crate::volume::bricks::Bricks;
+use crate::volume::octree::MinMaxOctree;
 use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
 
 pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.wgsl"));
@@ -20,6 +22,7 @@ pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.w
 pub enum GpuVolume<'a> {
     Dense,
     Bricks(&'a Bricks),
+    Octree(&'a MinMaxOctree),
 }
 
 impl<'a> GpuVolume<'a> {
@@ -32,7 +35,11 @@ impl<'a> GpuVolume<'a> {
                 .as_bricks()
                 .map(GpuVolume::Bricks)
                 .ok_or_else(|| "the bricks entry built no brick map".to_string()),
-            other => Err(format!("'{other}' has no GPU kernel yet (the dense marcher and the brick map do)")),
+            "octree" => structure
+                .as_octree()
+                .map(GpuVolume::Octree)
+                .ok_or_else(|| "the octree entry built no octree".to_string()),
+            other => Err(format!("'{other}' has no GPU kernel")),
         }
     }
 }
@@ -80,15 +87,33 @@ pub fn render_volume(
     header[10] = f(step);
     header[18] = tf.points().len() as u32;
     header[19..22].copy_from_slice(&volume.bounds().max.to_array().map(f));
+    let (mode, bricks) = match walk {
+        GpuVolume::Dense => (0, None),
+        GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
+        GpuVolume::Octree(tree) => (2, Some(&tree.bricks)),
+    };
+    header[11] = mode;
     let mut empty = Vec::new();
-    if let GpuVolume::Bricks(bricks) = walk {
-        header[11] = 1;
+    if let Some(bricks) = bricks {
         header[12..15].copy_from_slice(&bricks.res);
         header[15..18].copy_from_slice(&bricks.cells());
-        empty = vec![0u32; bricks.empty.len().div_ceil(32)];
-        for (i, _) in bricks.empty.iter().enumerate().filter(|(_, e)| **e) {
-            empty[i / 32] |= 1 << (i % 32);
+        empty = bits(&bricks.empty);
+    }
+    let mut tree = Vec::new();
+    if let GpuVolume::Octree(octree) = walk {
+        let levels: Vec<_> = octree.levels().collect();
+        tree = vec![levels.len() as u32];
+        let mut tables = Vec::new();
+        let start = 1 + 5 * levels.len() as u32;
+        for (res, empty, full) in levels {
+            let empty_at = start + tables.len() as u32;
+            tables.extend(bits(empty));
+            let full_at = start + tables.len() as u32;
+            tables.extend(bits(full));
+            tree.extend(res);
+            tree.extend([empty_at, full_at]);
         }
+        tree.extend(tables);
     }
     for &(value, rgba) in tf.points() {
         header.push(f(value));
@@ -111,6 +136,7 @@ pub fn render_volume(
             GpuBuffer { name: "vol", words: samples },
             GpuBuffer { name: "header", words: Cow::Owned(header) },
             GpuBuffer { name: "empty", words: Cow::Owned(empty) },
+            GpuBuffer { name: "tree", words: Cow::Owned(tree) },
         ],
         prepass: None,
         scratch_words: 4 * rays.len(),
@@ -130,4 +156,13 @@ pub fn render_volume(
         }
     }
     Ok(GpuVolumeRender { image, run })
+}
+
+/// One bit per flag, 32 to a word, flag `i` at bit `i % 32` of word `i / 32`.
+fn bits(flags: &[bool]) -> Vec<u32> {
+    let mut words = vec![0u32; flags.len().div_ceil(32)];
+    for (i, _) in flags.iter().enumerate().filter(|(_, f)| **f) {
+        words[i / 32] |= 1 << (i % 32);
+    }
+    words
 }

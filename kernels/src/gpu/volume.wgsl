@@ -1,13 +1,20 @@
 // Volume ray casting (issue 32), the WGSL twin of kernels/src/volume: front-to-back
 // emission–absorption compositing through a piecewise-linear transfer function, samples on the
 // global lattice t_k = k · step, trilinear reads, early termination below MIN_TRANSMITTANCE; the
-// dense marcher (mode 0) or the brick map's DDA over its empty bricks (mode 1). Every operation is
-// the CPU's in the CPU's order, so a device that rounds as the CPU does (lavapipe) gives the CPU's
-// image.
+// dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1), or the min/max
+// octree (mode 2). Every sample is the CPU's operations in the CPU's order, so a device that
+// rounds as the CPU does (lavapipe) gives the CPU's image. The dense and brick walks hand over
+// the CPU's very spans; the octree walk is not the CPU's recursion (a GPU thread has no call
+// stack) but a descent from the root at each span's start, so its spans tile the ray
+// differently — the same samples all the same, as any tiling that skips only transparent spans
+// takes them.
 //
 // Buffers (kernels/src/gpu/volume.rs): `vol` the samples packed into words (u8: four a word, u16:
 // two, f32: one, x fastest); `header` the header below, then the transfer function's points, five
-// words each (value, r, g, b, a); `empty` one bit per brick (mode 1).
+// words each (value, r, g, b, a); `empty` one bit per brick (modes 1 and 2); `tree` (mode 2) the
+// levels above the bricks, finest first: word 0 their count, then per level five words (its
+// resolution, and the word offsets in `tree` of its empty bits and of its full bits: no empty
+// brick below), then the bits.
 //
 // The answer per ray: premultiplied RGB and opacity 1 − T as four f32 words in `scratch` at
 // 4 · index; the hit's prim words carry the samples taken and the bricks visited.
@@ -21,7 +28,7 @@ const M_DIMS: u32 = 1u;        // 3 words
 const M_SPACING: u32 = 4u;     // 3 f32
 const M_INV_SPACING: u32 = 7u; // 3 f32, 1 / spacing as the CPU rounds it
 const M_STEP: u32 = 10u;       // f32
-const M_MODE: u32 = 11u;       // 0 dense, 1 bricks
+const M_MODE: u32 = 11u;       // 0 dense, 1 bricks, 2 octree
 const M_BRICKS: u32 = 12u;     // 3 words: bricks per axis
 const M_CELLS: u32 = 15u;      // 3 words: voxel cells per axis
 const M_POINTS: u32 = 18u;     // transfer-function points
@@ -217,14 +224,96 @@ fn march_bricks(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
     }
 }
 
+fn tree_bit(offset: u32, index: u32) -> bool {
+    return ((tree(offset + index / 32u) >> (index % 32u)) & 1u) != 0u;
+}
+
+// The min/max octree: from the span's start, the node the ray is in is found by descending from
+// the root until a node is empty (skipped to its exit), full (taken to its exit) or a brick (as
+// the brick map judges it). A start that rounds into a node the ray is leaving takes the sliver
+// up to the next lattice sample: taking is never wrong, only skipping must be safe, and the
+// bricks' value ranges reach past their faces, which covers a start rounded across one.
+fn march_octree(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
+    let o = ray.origin;
+    let d = ray.dir + vec3<f32>(0.0);
+    let inv = reciprocal(ray.dir);
+    let res = vec3<u32>(header(M_BRICKS), header(M_BRICKS + 1u), header(M_BRICKS + 2u));
+    let spacing = header_v3(M_SPACING);
+    let depth = tree(0u);
+    let step = header_f(M_STEP);
+    var cursor = t0;
+    var guard = 0u;
+    while (cursor < t1) {
+        if (!next_step(&guard)) {
+            return;
+        }
+        let p = o + ray.dir * cursor;
+        var brick: vec3<u32>;
+        for (var a = 0u; a < 3u; a++) {
+            brick[a] = u32(clamp(p[a] / (spacing[a] * f32(BRICK)), 0.0, f32(res[a] - 1u)));
+        }
+        // The coarsest node that settles the span: empty, full, or a brick.
+        var level = depth;
+        var take_it = false;
+        loop {
+            let node = brick >> vec3<u32>(level);
+            if (level == 0u) {
+                take_it = !brick_empty(node.x + res.x * (node.y + res.y * node.z));
+                break;
+            }
+            let at = 1u + 5u * (level - 1u);
+            let index = node.x + tree(at) * (node.y + tree(at + 1u) * node.z);
+            if (tree_bit(tree(at + 3u), index)) {
+                break;
+            }
+            if (tree_bit(tree(at + 4u), index)) {
+                take_it = true;
+                break;
+            }
+            level -= 1u;
+        }
+        (*c).visits += 1u;
+        // The node's exit: its far face on each axis the ray moves along.
+        let node = brick >> vec3<u32>(level);
+        var end = t1;
+        for (var a = 0u; a < 3u; a++) {
+            if (abs(inv[a]) <= F32_MAX && d[a] != 0.0) {
+                var face = node[a] << level;
+                if (d[a] > 0.0) {
+                    face = (node[a] + 1u) << level;
+                }
+                end = min(end, (brick_face(a, face) - o[a]) * inv[a]);
+            }
+        }
+        if (!(end > cursor)) {
+            // Rounded into a node the ray is leaving: take up to the next sample's t.
+            end = min(t1, (floor(cursor / step) + 1.0) * step);
+            if (!(end > cursor)) {
+                end = t1;
+            }
+            take_it = true;
+        }
+        if (take_it && !take(c, cursor, end)) {
+            return;
+        }
+        cursor = end;
+    }
+}
+
 fn trace(ray: Ray, index: u32) -> TraceResult {
     var c = Compositor(ray.origin, ray.dir, vec3<f32>(0.0), 1.0, 0u, 0u);
     let span = slab_span(ray.origin, reciprocal(ray.dir), vec3<f32>(0.0), header_v3(M_DOMAIN), 0.0, f32_inf());
     if (enters(span)) {
-        if (header(M_MODE) == 0u) {
-            take(&c, span.x, span.y);
-        } else {
-            march_bricks(&c, ray, span.x, span.y);
+        switch header(M_MODE) {
+            case 0u: {
+                take(&c, span.x, span.y);
+            }
+            case 1u: {
+                march_bricks(&c, ray, span.x, span.y);
+            }
+            default: {
+                march_octree(&c, ray, span.x, span.y);
+            }
         }
     }
     scratch[4u * index] = bitcast<u32>(c.rgb.x);

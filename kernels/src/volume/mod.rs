@@ -331,6 +331,10 @@ pub trait VolumeStructure: VolumeMarch + Send {
     fn as_bricks(&self) -> Option<&bricks::Bricks> {
         None
     }
+    /// The structure as a min/max octree, for the GPU kernel's octree walk; `None` for any other.
+    fn as_octree(&self) -> Option<&octree::MinMaxOctree> {
+        None
+    }
 }
 
 /// A volume structure by name: what `harness list` shows and how to build it.

@@ -99,6 +99,12 @@ impl MinMaxOctree {
             + self.levels.iter().map(|l| (l.ranges.len() * size_of::<(f32, f32)>() + l.empty.len()) as u64).sum::<u64>()
     }
 
+    /// The levels above the bricks, finest first: each one's resolution, and per node (x fastest)
+    /// whether it is empty and whether no brick below it is empty (the GPU kernel's tables).
+    pub fn levels(&self) -> impl Iterator<Item = ([u32; 3], &[bool], &[bool])> {
+        self.levels.iter().map(|l| (l.res, l.empty.as_slice(), l.full.as_slice()))
+    }
+
     /// Levels above the bricks.
     pub fn depth(&self) -> usize {
         self.levels.len()
@@ -195,6 +201,10 @@ impl VolumeStructure for MinMaxOctree {
 
     fn occupancy(&self) -> Option<f64> {
         Some(self.bricks.occupancy())
+    }
+
+    fn as_octree(&self) -> Option<&MinMaxOctree> {
+        Some(self)
     }
 }
 

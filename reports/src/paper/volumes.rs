@@ -42,7 +42,8 @@ pub fn section(results: &Results) -> Sheet {
     if let Some(g) = cases.iter().find(|c| c.backend != "cpu") {
         let _ = writeln!(
             out,
-            "Rows marked (gpu) ran the WGSL kernel on {} (the octree has none yet): kernel time only, × dense over \
+            "Rows marked (gpu) ran the WGSL kernel on {} (its octree walk cuts its own spans, so its samples and \
+             visits are its own): kernel time only, × dense over \
              the GPU dense marcher's, each image checked against the CPU dense image within {VOLUME_GPU_TOLERANCE} \
              per channel.\n",
             g.device

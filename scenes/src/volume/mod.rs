@@ -9,8 +9,10 @@
 //! - raw volumes named with their shape, `head.raw@256x256x225:u8` ([`raw`]);
 //! - built-in names: the MRI templates of Debian's `mricron-data` where installed
 //!   ([`BUILTIN_VOLUMES`]), the Marschner–Lobb test signal at any size, and a sparse particle field
-//!   (`particles@N:COUNT`, Gaussian blobs in an N³ box) ([`procedural`]).
+//!   (`particles@N:COUNT`, Gaussian blobs in an N³ box) ([`procedural`]), and the fog of any
+//!   triangle scene (`fog@SCENE:N`, density falling with the distance to its surface) ([`fog`]).
 
+pub mod fog;
 pub mod nifti;
 pub mod procedural;
 pub mod raw;
@@ -148,6 +150,7 @@ pub fn is_volume(name: &str) -> bool {
     BUILTIN_VOLUMES.iter().any(|v| v.name == name)
         || name.starts_with("marschner-lobb@")
         || name.starts_with("particles@")
+        || name.starts_with("fog@")
         || nifti::is_nifti(Path::new(name))
         || raw::parse_spec(name).is_some()
 }
@@ -181,6 +184,14 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
         })?;
         return procedural::particles(n, count, max_bytes);
     }
+    if let Some(recipe) = name.strip_prefix("fog@") {
+        let parsed = recipe.rsplit_once(':').and_then(|(scene, n)| Some((scene, n.parse::<u32>().ok()?)));
+        let (scene, n) = parsed.ok_or_else(|| SceneError::UnknownScene {
+            name: name.into(),
+            detail: format!("'{recipe}' is not a fog: fog@SCENE:N fits a triangle scene into an N³ fog volume"),
+        })?;
+        return fog::fog(scene, n, max_bytes);
+    }
     if let Some(spec) = raw::parse_spec(name) {
         return raw::load(&spec, max_bytes);
     }
@@ -189,8 +200,8 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
     }
     Err(SceneError::UnknownScene {
         name: name.into(),
-        detail: "not a volume: a built-in name, marschner-lobb@N, particles@N:COUNT, a .nii or .nii.gz file, or a raw \
-                 volume with its shape (head.raw@256x256x225:u8)"
+        detail: "not a volume: a built-in name, marschner-lobb@N, particles@N:COUNT, fog@SCENE:N, a .nii or .nii.gz \
+                 file, or a raw volume with its shape (head.raw@256x256x225:u8)"
             .into(),
     })
 }
