@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
-use common::{TINY, harness, harness_in_turn, read_json, temp_dir, turn};
+use common::{TINY, gpu_required, harness, harness_in_turn, read_json, temp_dir, turn};
 
 #[test]
 fn a_run_writes_results_report_and_images() {
@@ -162,11 +162,6 @@ fn unknown_names_are_refused() {
     let o = harness(&["run", "--structures", "kd-tree"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown structure 'kd-tree'"));
-}
-
-/// Whether this machine must have a GPU adapter (as `kernels::gpu::context_for_tests` decides).
-fn gpu_required() -> bool {
-    std::env::var("ACCEL_BENCH_REQUIRE_GPU").is_ok_and(|v| v.trim() == "1") || std::env::var_os("CI").is_some()
 }
 
 #[test]

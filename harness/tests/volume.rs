@@ -5,12 +5,7 @@
 
 mod common;
 
-use common::{TINY, harness, read_json, stderr, temp_dir};
-
-/// Whether this machine must have a GPU adapter (as `kernels::gpu::context_for_tests` decides).
-fn gpu_required() -> bool {
-    std::env::var("ACCEL_BENCH_REQUIRE_GPU").is_ok_and(|v| v.trim() == "1") || std::env::var_os("CI").is_some()
-}
+use common::{TINY, gpu_required, harness, read_json, stderr, temp_dir};
 
 #[test]
 fn a_volume_run_records_every_structure_beside_the_dense_marcher() {

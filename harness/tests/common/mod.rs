@@ -98,3 +98,8 @@ pub fn read_json(path: &Path) -> serde_json::Value {
 }
 
 pub const TINY: &[&str] = &["--width", "48", "--height", "32", "--reps", "2", "--warmup", "0", "--threads", "2"];
+
+/// Whether this machine must have a GPU adapter (as `kernels::gpu::context_for_tests` decides).
+pub fn gpu_required() -> bool {
+    std::env::var("ACCEL_BENCH_REQUIRE_GPU").is_ok_and(|v| v.trim() == "1") || std::env::var_os("CI").is_some()
+}

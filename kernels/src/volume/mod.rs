@@ -380,8 +380,9 @@ impl Histogram {
     pub const F32_SAMPLES: usize = 1 << 22;
 
     pub fn of(volume: &Volume) -> Self {
-        fn counts(bins: usize, samples: impl ParallelIterator<Item = usize>) -> Vec<u64> {
-            samples
+        // Exact counts per integer value, the values held kept.
+        fn counts(bins: usize, samples: impl ParallelIterator<Item = usize>) -> Vec<(f32, u64)> {
+            let per_value = samples
                 .fold(
                     || vec![0u64; bins],
                     |mut h, v| {
@@ -389,21 +390,12 @@ impl Histogram {
                         h
                     },
                 )
-                .reduce(|| vec![0u64; bins], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect())
+                .reduce(|| vec![0u64; bins], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect());
+            per_value.into_iter().enumerate().filter(|&(_, n)| n > 0).map(|(x, n)| (x as f32, n)).collect()
         }
         let values: Vec<(f32, u64)> = match &volume.samples {
-            Samples::U8(v) => counts(256, v.par_iter().map(|&x| usize::from(x)))
-                .into_iter()
-                .enumerate()
-                .filter(|&(_, n)| n > 0)
-                .map(|(x, n)| (x as f32, n))
-                .collect(),
-            Samples::U16(v) => counts(65536, v.par_iter().map(|&x| usize::from(x)))
-                .into_iter()
-                .enumerate()
-                .filter(|&(_, n)| n > 0)
-                .map(|(x, n)| (x as f32, n))
-                .collect(),
+            Samples::U8(v) => counts(256, v.par_iter().map(|&x| usize::from(x))),
+            Samples::U16(v) => counts(65536, v.par_iter().map(|&x| usize::from(x))),
             Samples::F32(v) => {
                 let stride = v.len().div_ceil(Self::F32_SAMPLES).max(1);
                 let mut s: Vec<f32> = v.iter().step_by(stride).copied().filter(|x| !x.is_nan()).collect();
