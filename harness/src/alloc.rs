@@ -92,9 +92,12 @@ mod tests {
         let _alone = counts_to_myself();
         let base = reset_peak();
         let block = vec![1u8; 64 << 20];
-        assert!(peak_bytes() >= base + (64 << 20));
+        // Not `base + 64 MiB`: a test on another thread may free its own memory meanwhile and
+        // lower the live count under the block. The block alone is live all the same.
+        let peak = peak_bytes();
+        assert!(peak >= 64 << 20, "{peak} after a 64 MiB block ({base} before)");
         drop(block);
         assert!(live_bytes() < base + (64 << 20), "freed bytes leave the live count");
-        assert!(peak_bytes() >= base + (64 << 20), "the peak stays until reset");
+        assert!(peak_bytes() >= 64 << 20, "the peak stays until reset");
     }
 }
