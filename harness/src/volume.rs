@@ -90,6 +90,10 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         bail!("--param {bad}: not a parameter of the volume workload (it reads {})", known.join(", "));
     }
     let sweep = Sweep::from_params(&params)?;
+    let step_voxels: f32 = params.get("volume.step", 0.5)?;
+    if !(step_voxels.is_finite() && step_voxels > 0.0 && step_voxels <= 16.0) {
+        bail!("--param volume.step={step_voxels}: a step above 0 and at most 16 voxels");
+    }
     let mut structures: Vec<&'static volume::VolumeEntry> = Vec::new();
     for name in &plan.structures {
         let entry = volume::find_volume_structure(name).with_context(|| {
@@ -132,7 +136,7 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut failed = Vec::new();
     for source in &plan.scenes {
-        let run = SourceRun { plan: &plan, args, structures: &structures, sweep: &sweep, bar: &bar, gpu };
+        let run = SourceRun { plan: &plan, args, structures: &structures, sweep: &sweep, step_voxels, bar: &bar, gpu };
         let outcome = pool.install(|| run.measure(source, &budget, &mut out));
         if let Err(e) = outcome {
             let reason = format!("{e:#}");
@@ -189,10 +193,6 @@ impl Sweep {
         if !(0.0..=1.0).contains(&peak) || peak == 0.0 {
             bail!("--param volume.peak={peak}: an opacity above 0 and at most 1");
         }
-        let step: f32 = params.get("volume.step", 0.5)?;
-        if !(step.is_finite() && step > 0.0 && step <= 16.0) {
-            bail!("--param volume.step={step}: a step above 0 and at most 16 voxels");
-        }
         let tf: String = params.get("volume.tf", String::new())?;
         let occupancy: String = params.get("volume.occupancy", String::new())?;
         if !tf.is_empty() {
@@ -248,6 +248,8 @@ struct SourceRun<'a> {
     args: &'a RunArgs,
     structures: &'a [&'static volume::VolumeEntry],
     sweep: &'a Sweep,
+    /// The lattice step along a ray, in voxels (`volume.step`).
+    step_voxels: f32,
     bar: &'a ProgressBar,
     gpu: Option<&'static kernels::gpu::GpuContext>,
 }
@@ -279,8 +281,7 @@ impl SourceRun<'_> {
         let histogram = Histogram::of(&volume);
         let transfers = self.sweep.transfers(&volume, &histogram);
         bar.inc(((self.sweep.len() - transfers.len()) * self.structures.len() * backends) as u64);
-        let step_voxels: f32 = Params::parse(plan.params.iter().map(String::as_str))?.get("volume.step", 0.5)?;
-        let step = volume.spacing.iter().copied().fold(f32::INFINITY, f32::min) * step_voxels;
+        let step = volume.spacing.iter().copied().fold(f32::INFINITY, f32::min) * self.step_voxels;
         let camera = Camera::new(CameraSpec::canonical(volume.bounds()), plan.width, plan.height);
         let first = &transfers.first().context("a sweep has a transfer function")?.tf;
 
@@ -290,15 +291,25 @@ impl SourceRun<'_> {
             let (structure, build) = timed_builds(entry, &volume, first, plan)?;
             built.push(Built { entry, structure, build });
         }
-        // Brick occupancy is the brick map's whatever the structures measured.
-        let mut bricks = volume::bricks::Bricks::build(&volume, first);
+        // The share of bricks occupied is the brick map's, whichever structures run: read from
+        // one that holds bricks, built apart only for a run of the dense marcher alone.
+        let mut own_bricks = built
+            .iter()
+            .all(|b| b.structure.occupancy().is_none())
+            .then(|| volume::bricks::Bricks::build(&volume, first));
         for transfer in &transfers {
             bar.set_message(format!("{name} [{}]: rendering", transfer.label));
-            bricks.set_transfer_function(&transfer.tf);
             let mut updates = Vec::new();
             for b in &mut built {
                 updates.push(timed_update(b.structure.as_mut(), &transfer.tf, plan.build_reps.max(1)));
             }
+            let occupied_bricks = match own_bricks.as_mut() {
+                Some(bricks) => {
+                    bricks.set_transfer_function(&transfer.tf);
+                    bricks.occupancy()
+                }
+                None => built.iter().find_map(|b| b.structure.occupancy()).context("a structure with bricks")?,
+            };
             let cast = Cast { volume: &volume, tf: &transfer.tf, camera: &camera, step };
             let rounds = self.rounds(&built, cast);
             let image = match self.args.no_images {
@@ -306,9 +317,9 @@ impl SourceRun<'_> {
                 false => Some(write_image(out, name, &transfer.label, &rounds.images[0])?),
             };
             let dense = Timing::from_samples(&rounds.times[0]);
+            let rays = f64::from(plan.width) * f64::from(plan.height);
             for (i, b) in built.iter().enumerate() {
                 let picture = &rounds.images[i];
-                let rays = f64::from(plan.width) * f64::from(plan.height);
                 let render = Timing::from_samples(&rounds.times[i]);
                 let mismatched = picture
                     .rgba
@@ -326,7 +337,7 @@ impl SourceRun<'_> {
                     transfer_points: transfer.tf.describe(),
                     target_visible: transfer.target,
                     visible_voxels: histogram.visible(&transfer.tf),
-                    occupied_bricks: bricks.occupancy(),
+                    occupied_bricks,
                     structure: b.entry.name.into(),
                     backend: "cpu".into(),
                     device: cpu_device.clone(),

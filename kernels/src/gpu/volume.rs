@@ -51,7 +51,18 @@ pub struct GpuVolumeRender {
     pub run: GpuRun,
 }
 
-/// `header`'s header words before the transfer function's points (`M_TF` in volume.wgsl).
+/// Where each field of the `header` buffer sits: volume.wgsl's `M_*` constants, word for word.
+const M_KIND: usize = 0;
+const M_DIMS: usize = 1;
+const M_SPACING: usize = 4;
+const M_INV_SPACING: usize = 7;
+const M_STEP: usize = 10;
+const M_MODE: usize = 11;
+const M_BRICKS: usize = 12;
+const M_CELLS: usize = 15;
+const M_POINTS: usize = 18;
+const M_DOMAIN: usize = 19;
+/// The header's words before the transfer function's points (`M_TF`).
 const HEADER_WORDS: usize = 32;
 
 /// Casts `camera`'s rays through `volume` with `walk` on the GPU, sampling every `step` under
@@ -76,27 +87,27 @@ pub fn render_volume(
     }
     let f = f32::to_bits;
     let mut header = vec![0u32; HEADER_WORDS];
-    header[0] = match volume.samples {
+    header[M_KIND] = match volume.samples {
         Samples::U8(_) => 0,
         Samples::U16(_) => 1,
         Samples::F32(_) => 2,
     };
-    header[1..4].copy_from_slice(&volume.dims);
-    header[4..7].copy_from_slice(&volume.spacing.map(f));
-    header[7..10].copy_from_slice(&volume.spacing.map(|s| f(1.0 / s)));
-    header[10] = f(step);
-    header[18] = tf.points().len() as u32;
-    header[19..22].copy_from_slice(&volume.bounds().max.to_array().map(f));
+    header[M_DIMS..M_DIMS + 3].copy_from_slice(&volume.dims);
+    header[M_SPACING..M_SPACING + 3].copy_from_slice(&volume.spacing.map(f));
+    header[M_INV_SPACING..M_INV_SPACING + 3].copy_from_slice(&volume.spacing.map(|s| f(1.0 / s)));
+    header[M_STEP] = f(step);
+    header[M_POINTS] = tf.points().len() as u32;
+    header[M_DOMAIN..M_DOMAIN + 3].copy_from_slice(&volume.bounds().max.to_array().map(f));
     let (mode, bricks) = match walk {
         GpuVolume::Dense => (0, None),
         GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
         GpuVolume::Octree(tree) => (2, Some(&tree.bricks)),
     };
-    header[11] = mode;
+    header[M_MODE] = mode;
     let mut empty = Vec::new();
     if let Some(bricks) = bricks {
-        header[12..15].copy_from_slice(&bricks.res);
-        header[15..18].copy_from_slice(&bricks.cells());
+        header[M_BRICKS..M_BRICKS + 3].copy_from_slice(&bricks.res);
+        header[M_CELLS..M_CELLS + 3].copy_from_slice(&bricks.cells());
         empty = bits(&bricks.empty);
     }
     let mut tree = Vec::new();
@@ -165,4 +176,30 @@ fn bits(flags: &[bool]) -> Vec<u32> {
         words[i / 32] |= 1 << (i % 32);
     }
     words
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header offsets written here are the ones volume.wgsl reads.
+    #[test]
+    fn header_offsets_match_the_kernel() {
+        let wgsl = include_str!("volume.wgsl");
+        for (name, at) in [
+            ("M_KIND", M_KIND),
+            ("M_DIMS", M_DIMS),
+            ("M_SPACING", M_SPACING),
+            ("M_INV_SPACING", M_INV_SPACING),
+            ("M_STEP", M_STEP),
+            ("M_MODE", M_MODE),
+            ("M_BRICKS", M_BRICKS),
+            ("M_CELLS", M_CELLS),
+            ("M_POINTS", M_POINTS),
+            ("M_DOMAIN", M_DOMAIN),
+            ("M_TF", HEADER_WORDS),
+        ] {
+            assert!(wgsl.contains(&format!("const {name}: u32 = {at}u;")), "{name} = {at}");
+        }
+    }
 }
