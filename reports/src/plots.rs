@@ -1,7 +1,8 @@
 //! The report's charts (docs/design.md §8), drawn with plotters into SVG strings that `report.html`
 //! inlines: grouped bars (build and render times, with min–max whiskers), stacked bars (memory by
-//! component), log–log scaling plots with the fitted exponent in the legend, and per scene the
-//! trade-off a user chooses on, Mrays/s against memory. Legends sit beside the plot, never over
+//! component), log–log scaling plots with the fitted exponent in the legend, per scene the
+//! trade-off a user chooses on, Mrays/s against memory, and per volume source each structure's
+//! speed-up over the dense marcher against the share of voxels left visible. Legends sit beside the plot, never over
 //! it; log axes tick at 1, 2, 5 × 10ⁿ (or powers of two for voxel resolutions). Text is left to
 //! the browser (no font files), so the SVG holds no external reference. The SVG is meant to be
 //! inlined in HTML, so it carries no `xmlns` either.
@@ -77,6 +78,8 @@ enum Marker {
     Square,
     Dot,
     Line,
+    /// A published figure, drawn as a cross beside our dots.
+    Cross,
 }
 
 /// The first legend row's centre, level with the plot's top, and the rows' pitch, in pixels.
@@ -127,6 +130,7 @@ fn draw_legend(area: &DrawingArea<SVGBackend, Shift>, entries: &[Entry]) -> Resu
             Marker::Square => area.draw(&Rectangle::new([(6, y - 5), (16, y + 5)], c.filled())),
             Marker::Dot => area.draw(&Circle::new((11, y), 4, c.filled())),
             Marker::Line => area.draw(&PathElement::new(vec![(4, y), (18, y)], c.stroke_width(2))),
+            Marker::Cross => area.draw(&Cross::new((11, y), 5, c.stroke_width(2))),
         }
         .map_err(e)?;
         area.draw(&Text::new(entry.label.clone(), (24, y), style.clone())).map_err(e)?;
@@ -398,6 +402,85 @@ pub fn speed_memory(title: &str, choices: &[Choice]) -> Result<String, PlotError
     })
 }
 
+/// One structure's speed-ups over the dense marcher on a volume source: `(visible voxels in %,
+/// × dense)` at each transfer function.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpeedUps {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A published speed-up shown beside ours: what it is, at what share of visible voxels (%).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Published {
+    pub label: String,
+    pub visible_percent: f64,
+    pub speed_up: f64,
+}
+
+/// Speed-up over the dense marcher against the share of voxels a transfer function leaves
+/// visible, log–log: one line per structure (its transfer functions in order of visibility), the
+/// published figures as crosses, and a dashed line at 1× (as fast as the dense marcher: below it
+/// skipping costs more than it saves).
+pub fn speed_up_occupancy(title: &str, series: &[SpeedUps], published: &[Published]) -> Result<String, PlotError> {
+    let ours = series.iter().flat_map(|s| s.points.iter().copied());
+    let theirs = published.iter().map(|p| (p.visible_percent, p.speed_up));
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, 1.0f64, 1.0f64);
+    for (x, y) in ours.chain(theirs).filter(|&(x, y)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()) {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if series.iter().all(|s| s.points.is_empty()) || x1 <= 0.0 {
+        return Err(PlotError { title: title.into(), message: "no speed-up to plot".into() });
+    }
+    let (xr, yr) = ((x0 / 1.6, x1 * 1.6), (y0 / 1.4, y1 * 1.4));
+    let gray = RGBColor(60, 60, 60);
+    let mut legend: Vec<Entry> = series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Entry { label: s.label.clone(), color: color(i), marker: Marker::Dot })
+        .collect();
+    legend.extend(published.iter().map(|p| Entry {
+        label: format!("{} {}×", p.label, significant(p.speed_up)),
+        color: gray,
+        marker: Marker::Cross,
+    }));
+    svg(title, SCALING_SIZE, &legend, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, TITLE_FONT)
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                (xr.0..xr.1).log_scale().with_key_points(log_ticks(xr.0, xr.1)),
+                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
+            )
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc("visible voxels (%)")
+            .y_desc("× dense marcher")
+            .label_style(LABEL_FONT)
+            .axis_desc_style(LABEL_FONT)
+            .x_label_formatter(&|x| significant(*x))
+            .y_label_formatter(&|y| significant(*y))
+            .draw()
+            .map_err(e)?;
+        chart.draw_series(DashedLineSeries::new([(xr.0, 1.0), (xr.1, 1.0)], 6, 4, gray.stroke_width(1))).map_err(e)?;
+        for (i, s) in series.iter().enumerate() {
+            let c = color(i);
+            let mut points = s.points.clone();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart.draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2))).map_err(e)?;
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
+        }
+        for p in published {
+            let at = (p.visible_percent, p.speed_up);
+            chart.draw_series(std::iter::once(Cross::new(at, 5, gray.stroke_width(2)))).map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
 /// The choices no other is both smaller and faster than, by memory.
 fn pareto_front<'a>(points: &[&'a Choice]) -> Vec<&'a Choice> {
     let mut sorted = points.to_vec();
@@ -548,6 +631,18 @@ mod tests {
         let refs: Vec<&Choice> = choices.iter().collect();
         let front: Vec<&str> = pareto_front(&refs).iter().map(|c| c.label.as_str()).collect();
         assert_eq!(front, ["org", "bvh"], "svo is both larger and slower than bvh");
+    }
+
+    #[test]
+    fn speed_ups_are_drawn_beside_the_published_figures() {
+        let series = [SpeedUps { label: "bricks".into(), points: vec![(30.0, 1.5), (1.0, 4.5), (100.0, 0.95)] }];
+        let published = [Published { label: "grid".into(), visible_percent: 0.15, speed_up: 3.5 }];
+        let svg = speed_up_occupancy("field", &series, &published).unwrap();
+        assert!(svg.contains("bricks") && svg.contains("grid 3.5×") && svg.contains("visible voxels"));
+        // Nothing of ours to draw is an error naming the chart, not an empty frame.
+        let none = [SpeedUps { label: "bricks".into(), points: Vec::new() }];
+        let err = speed_up_occupancy("field", &none, &published).unwrap_err();
+        assert!(err.to_string().contains("field"), "{err}");
     }
 
     #[test]

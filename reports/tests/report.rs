@@ -214,3 +214,46 @@ fn cases_that_did_not_run_and_rays_at_the_bound_are_listed() {
     let plain = serde_json::to_string(&fixture()).expect("serialise");
     assert!(!plain.contains("\"skipped\"") && !plain.contains("rays_at_bound"), "absent when empty");
 }
+
+#[test]
+fn volume_runs_chart_each_sources_speed_ups_beside_the_published_figures() {
+    use reports::{Timing, VolumeCase};
+    let case = |source: &str, structure: &str, visible: f64, ms: f64| VolumeCase {
+        source: source.into(),
+        backend: "cpu".into(),
+        structure: structure.into(),
+        visible_voxels: visible,
+        render: Timing::from_samples(&[ms]),
+        dense_timing: (structure != "dense").then(|| Timing::from_samples(&[10.0])),
+        ..Default::default()
+    };
+    let mut volumes = Vec::new();
+    for source in ["mri-ch2", "particles@2048:192000"] {
+        for visible in [0.01, 0.3, 1.0] {
+            volumes.push(case(source, "dense", visible, 10.0));
+            volumes.push(case(source, "bricks", visible, 10.0 * visible.sqrt()));
+            volumes.push(case(source, "octree", visible, 12.0 * visible.sqrt()));
+        }
+    }
+    let results = Results { volumes, ..Default::default() };
+    let page = html::report(&results, &Shots::new());
+    for want in [
+        "<a href=\"#volume-charts\">",
+        "id=\"volume-charts\"",
+        "mri-ch2: × dense against visible voxels",
+        "particles@2048:192000: × dense against visible voxels",
+        "Zellmann 2019: grid 3.5×",
+        "Zellmann 2019: deep k-d tree 6.6×",
+        "Zellmann 2019: grid, all visible 0.53×",
+    ] {
+        assert!(page.contains(want), "report.html lacks {want}");
+    }
+    let charts = page.split("id=\"volume-charts\"").nth(1).and_then(|s| s.split("</section>").next()).unwrap_or("");
+    assert_eq!(charts.matches("<svg").count(), 2, "one chart per source");
+    // Each chart's legend names the two skipping structures; the dense marcher is the 1× line.
+    assert_eq!(charts.matches("\nbricks\n").count(), 2, "{charts}");
+    assert_eq!(charts.matches("\noctree\n").count(), 2);
+    assert!(!charts.contains("\ndense\n"));
+    // A run without volumes has no such section.
+    assert!(!html::report(&fixture(), &Shots::new()).contains("volume-charts"));
+}

@@ -6,6 +6,7 @@
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
+use crate::plots::{Published, SpeedUps};
 use crate::schema::{Results, VOLUME_GPU_TOLERANCE, VolumeCase};
 
 /// The issue's source of the targets.
@@ -14,17 +15,59 @@ const SOURCE: &str = "issue 32";
 /// Where the published figures come from and what they were measured on.
 const ZELLMANN: &str = "Zellmann, Meurer & Lang, VIS 2019, CUDA on a Titan V";
 
-pub fn section(results: &Results) -> Sheet {
-    let mut out = Sheet::default();
-    let cases = &results.volumes;
-    if cases.is_empty() {
-        return out;
-    }
+/// Zellmann, Meurer & Lang's speed-ups over a naive marcher on a 2048³ N-body field ([`ZELLMANN`]):
+/// what, at what share of visible voxels (%), and how many times the naive marcher's speed.
+const PUBLISHED: [(&str, f64, f64); 3] =
+    [("grid", 0.15, 3.5), ("deep k-d tree", 0.15, 6.6), ("grid, all visible", 100.0, 1.0 / 1.9)];
+
+/// The published figures as the speed-up chart draws them, each naming its source.
+pub fn published() -> Vec<Published> {
+    PUBLISHED
+        .iter()
+        .map(|&(what, visible_percent, speed_up)| Published {
+            label: format!("Zellmann 2019: {what}"),
+            visible_percent,
+            speed_up,
+        })
+        .collect()
+}
+
+/// The sources of `cases` in the order they first appear.
+pub fn sources(cases: &[VolumeCase]) -> Vec<&str> {
     let mut sources: Vec<&str> = Vec::new();
     for c in cases {
         if !sources.contains(&c.source.as_str()) {
             sources.push(&c.source);
         }
+    }
+    sources
+}
+
+/// Per structure (and backend, and machine in a merged run) on `source`: its speed-up over the
+/// dense marcher at each transfer function, against the share of voxels visible (%). The dense
+/// marcher itself is the 1× line.
+pub fn speed_ups(cases: &[VolumeCase], source: &str) -> Vec<SpeedUps> {
+    let mut series: Vec<SpeedUps> = Vec::new();
+    for c in cases.iter().filter(|c| c.source == source) {
+        let Some(x) = c.speed_up() else { continue };
+        let mut name = label(c);
+        if let Some(machine) = &c.machine {
+            name = format!("{name} [{machine}]");
+        }
+        let point = (100.0 * c.visible_voxels, x);
+        match series.iter_mut().find(|s| s.label == name) {
+            Some(s) => s.points.push(point),
+            None => series.push(SpeedUps { label: name, points: vec![point] }),
+        }
+    }
+    series
+}
+
+pub fn section(results: &Results) -> Sheet {
+    let mut out = Sheet::default();
+    let cases = &results.volumes;
+    if cases.is_empty() {
+        return out;
     }
     out.push_str("## Volumes — empty space skipped per structure (seed 003)\n\n");
     let first = &cases[0];
@@ -50,7 +93,7 @@ pub fn section(results: &Results) -> Sheet {
         );
     }
     let mut checks = Vec::new();
-    for source in sources {
+    for source in sources(cases) {
         let of: Vec<&VolumeCase> = cases.iter().filter(|c| c.source == source).collect();
         let s = of[0];
         let _ = writeln!(
