@@ -154,9 +154,14 @@ pub fn cast<L: CastNodes, S: Stats>(
                 if nodes.leaf(&d, slot, scale) {
                     return Some(CastHit::at(t_min, parent, slot, pos.into(), scale, r.mirror_mask));
                 }
-                // PUSH
-                if tc_max < h {
-                    stack[scale as usize] = (parent, t_max);
+                // PUSH. The paper writes the entry only when `tc_max < h`: otherwise this child is
+                // the last the ray meets in its parent, so no POP returns to this scale before
+                // another PUSH rewrites it. Writing it always stores what a POP here would need
+                // anyway and spares the loop a branch that mispredicts on about one push in two
+                // (callgrind's branch simulation, city 256²: 2.7 of ESVO's 14.4 mispredicts per
+                // ray). The count stays the paper's push.
+                stack[scale as usize] = (parent, t_max);
+                if S::COUNTING && tc_max < h {
                     stats.push();
                 }
                 h = tc_max;
@@ -187,9 +192,10 @@ pub fn cast<L: CastNodes, S: Stats>(
             let mut corner_at = pos.to_array();
             let mut differing = 0u32;
             for (a, &x) in corner_at.iter().enumerate() {
-                if step_mask >> a & 1 == 1 {
-                    differing |= x.to_bits() ^ (x + scale_exp2).to_bits();
-                }
+                // The stepped axes' bits, masked in rather than branched on (the axes stepped
+                // are the ray's data: a branch here mispredicts).
+                let stepped = 0u32.wrapping_sub(step_mask >> a & 1);
+                differing |= (x.to_bits() ^ (x + scale_exp2).to_bits()) & stepped;
             }
             scale = 31 - differing.leading_zeros();
             if scale >= S_MAX {
