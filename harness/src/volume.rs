@@ -141,7 +141,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         if let Err(e) = outcome {
             let reason = format!("{e:#}");
             bar.suspend(|| eprintln!("  {source}: skipped: {reason}"));
-            let kind = if reason.contains("not installed") { "unavailable" } else { "error" };
+            let absent = e.chain().any(|c| matches!(c.downcast_ref(), Some(scenes::SceneError::NotInstalled { .. })));
+            let kind = if absent { "unavailable" } else { "error" };
             out.push_skipped(reports::SkippedCase {
                 scene: source.clone(),
                 structure: "*".into(),

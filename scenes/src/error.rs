@@ -67,6 +67,10 @@ pub enum SceneError {
     /// A scene name that is neither built in nor a file with a known extension.
     #[error("unknown scene '{name}': {detail}")]
     UnknownScene { name: String, detail: String },
+    /// A built-in source whose package is not installed here (an MRI scan of `mricron-data`):
+    /// known, but unavailable on this machine, which a run reports apart from a failure.
+    #[error("'{name}' is not installed: {detail}")]
+    NotInstalled { name: String, detail: String },
 }
 
 /// How many items of a list a message shows before "and N more".

@@ -197,6 +197,7 @@ fn the_mricron_templates_load_as_the_scans_they_are() {
         assert!(!required, "mricron-data is not installed: apt-get install mricron-data");
         eprintln!("skipped: mricron-data is not installed");
         let e = load_volume("mri-ch2", BUDGET).expect_err("absent");
+        assert!(matches!(e, SceneError::NotInstalled { .. }), "absent, not unknown: {e}");
         assert!(e.to_string().contains("apt-get install mricron-data"), "{e}");
         return;
     }

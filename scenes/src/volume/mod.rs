@@ -160,9 +160,9 @@ pub fn is_volume(name: &str) -> bool {
 pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
     if let Some(builtin) = BUILTIN_VOLUMES.iter().find(|v| v.name == name) {
         return match builtin.path {
-            Some(path) if !Path::new(path).exists() => Err(SceneError::UnknownScene {
+            Some(path) if !Path::new(path).exists() => Err(SceneError::NotInstalled {
                 name: name.into(),
-                detail: format!("{} is not installed: `apt-get install mricron-data` puts it at {path}", builtin.about),
+                detail: format!("{}; `apt-get install mricron-data` puts it at {path}", builtin.about),
             }),
             Some(path) => nifti::load(Path::new(path), max_bytes).map(|v| Volume { name: name.into(), ..v }),
             None => procedural::marschner_lobb(procedural::MARSCHNER_LOBB_SIZE, max_bytes),
