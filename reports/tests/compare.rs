@@ -201,3 +201,83 @@ fn without_paired_reps_the_runs_bvh_case_is_the_reference() {
     let row = c.rows.iter().find(|r| r.metric == "render" && r.structure == "org").expect("org render row");
     assert!(row.note.contains("bvh case"), "{}", row.note);
 }
+
+/// A volume run of two sources, each through the dense marcher and two skipping structures at
+/// two transfer functions, every render timed in five rounds beside the dense marcher's.
+fn volume_run() -> Results {
+    use reports::{Timing, VolumeCase};
+    let rounds = |ms: f64| Timing::from_samples(&[ms, ms * 1.01, ms * 0.99, ms * 1.02, ms * 0.98]);
+    let mut volumes = Vec::new();
+    for source in ["marschner-lobb@64", "particles@128:100"] {
+        for (transfer, visible) in [("visible 10 %", 0.1f64), ("visible 100 %", 1.0)] {
+            for (structure, ms) in [("dense", 40.0), ("bricks", 40.0 * visible.max(0.3)), ("octree", 45.0 * visible)] {
+                volumes.push(VolumeCase {
+                    source: source.into(),
+                    backend: "cpu".into(),
+                    transfer: transfer.into(),
+                    visible_voxels: visible,
+                    occupied_bricks: (visible * 1.5).min(1.0),
+                    structure: structure.into(),
+                    bytes: if structure == "dense" { 0 } else { 4096 },
+                    render: rounds(ms),
+                    dense_timing: (structure != "dense").then(|| rounds(40.0)),
+                    samples_per_ray: 100.0 * visible,
+                    visits_per_ray: 20.0,
+                    ..Default::default()
+                });
+            }
+        }
+    }
+    Results { volumes, ..Default::default() }
+}
+
+fn volume_mut<'a>(r: &'a mut Results, source: &str, structure: &str) -> &'a mut reports::VolumeCase {
+    r.volumes.iter_mut().find(|v| v.source == source && v.structure == structure).expect("the run has the case")
+}
+
+#[test]
+fn volume_cases_are_gated_on_their_counts_and_their_ratio_to_the_dense_marcher() {
+    let base = volume_run();
+    assert!(failing(&run(&base, &base)).is_empty(), "an unchanged rerun passes");
+    let cmp = run(&base, &base);
+    assert!(cmp.rows.iter().any(|r| r.metric == "samples_per_ray" && r.structure == "bricks, visible 10 %"));
+    let ratio = cmp.rows.iter().find(|r| r.metric == "render" && r.structure == "octree, visible 10 %").expect("row");
+    assert!(ratio.note.contains("dense"), "divided by the dense marcher: {}", ratio.note);
+
+    // A machine slowed down uniformly, the dense marcher's rounds with it: the ratios hold.
+    let mut slower = base.clone();
+    for v in &mut slower.volumes {
+        scale(&mut v.render, 1.7);
+        v.dense_timing.iter_mut().for_each(|t| scale(t, 1.7));
+    }
+    assert!(failing(&run(&slower, &base)).is_empty(), "{:?}", failing(&run(&slower, &base)));
+
+    // Less skipping (more visits), another visible share, a differing pixel, a structure twice as
+    // slow against the same dense rounds: each fails on its own row.
+    let mut worse = base.clone();
+    volume_mut(&mut worse, "marschner-lobb@64", "bricks").visits_per_ray *= 1.5;
+    volume_mut(&mut worse, "marschner-lobb@64", "octree").visible_voxels *= 0.9;
+    volume_mut(&mut worse, "particles@128:100", "bricks").mismatched_pixels = 1;
+    scale(&mut volume_mut(&mut worse, "particles@128:100", "octree").render, 2.0);
+    let failed = failing(&run(&worse, &base));
+    for want in [
+        "marschner-lobb@64 bricks, visible 10 % cpu/volume visits_per_ray",
+        "marschner-lobb@64 octree, visible 10 % cpu/volume visible_voxels",
+        "particles@128:100 bricks, visible 10 % cpu/volume pixel_mismatches",
+        "particles@128:100 octree, visible 10 % cpu/volume render",
+    ] {
+        assert!(failed.iter().any(|f| f == want), "{want} not among {failed:?}");
+    }
+    // One of the octree's four cases twice as slow moves its mean over all four by 2^¼ = 1.19×.
+    assert!(failed.iter().any(|f| f == "all 4 volume cases octree cpu/volume render_geomean"), "{failed:?}");
+    assert_eq!(failed.len(), 5, "{failed:?}");
+
+    // A volume case lost fails; one added is reported.
+    let mut fewer = base.clone();
+    fewer
+        .volumes
+        .retain(|v| !(v.structure == "octree" && v.transfer == "visible 100 %" && v.source.starts_with("particles")));
+    let cmp = run(&fewer, &base);
+    assert_eq!(failing(&cmp), ["particles@128:100 octree, visible 100 %  —"]);
+    assert!(run(&base, &fewer).rows.iter().any(|r| r.status == Status::New));
+}

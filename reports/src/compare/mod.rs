@@ -30,7 +30,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::schema::{Case, RenderStats, Results, Timing};
+use crate::schema::{Case, RenderStats, Results, Timing, VolumeCase};
 
 mod table;
 mod thresholds;
@@ -40,6 +40,39 @@ pub use thresholds::{ThresholdError, Thresholds};
 
 /// The structure timings are divided by (docs/design.md §4.5: the reference BVH).
 pub const REFERENCE: &str = "bvh";
+
+/// The structure a volume case's render time is divided by: the dense marcher, timed in the same
+/// rounds (`VolumeCase::dense_timing`).
+pub const VOLUME_REFERENCE: &str = "dense";
+
+/// Whom a row speaks of: the scene (or volume source), the structure as the table names it, the
+/// name its timings are averaged under over every scene, and the reference they are divided by.
+struct Who {
+    scene: String,
+    name: String,
+    group: String,
+    reference: &'static str,
+}
+
+impl Who {
+    fn case(c: &Case) -> Self {
+        let name = case_name(c);
+        Self { scene: c.scene.clone(), group: name.clone(), name, reference: REFERENCE }
+    }
+
+    /// A volume case: its structure (with backend and machine where they tell it apart) at its
+    /// transfer function; averaged per structure over every source and transfer function.
+    fn volume(v: &VolumeCase) -> Self {
+        let mut group = v.structure.clone();
+        if v.backend != "cpu" {
+            group = format!("{group} ({})", v.backend);
+        }
+        if let Some(machine) = &v.machine {
+            group = format!("{group} [{machine}]");
+        }
+        Self { scene: v.source.clone(), name: format!("{group}, {}", v.transfer), group, reference: VOLUME_REFERENCE }
+    }
+}
 
 /// What a row's comparison found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -177,13 +210,22 @@ pub fn compare_with(new: &Results, base: &Results, thresholds: &Thresholds, gate
     let mut geo: BTreeMap<(String, String, &'static str), Vec<f64>> = BTreeMap::new();
     for b in &base.cases {
         let Some(n) = new.cases.iter().find(|n| same_case(n, b)) else {
-            cmp.rows.push(presence_row(b, "", Status::Missing, "case not in NEW"));
+            cmp.rows.push(presence_row(&Who::case(b), "", Status::Missing, "case not in NEW"));
             continue;
         };
         compare_case(&mut cmp.rows, &mut geo, (n, new), (b, base), thresholds, timing_gated);
     }
     for n in new.cases.iter().filter(|n| !base.cases.iter().any(|b| same_case(n, b))) {
-        cmp.rows.push(presence_row(n, "", Status::New, "case not in BASE"));
+        cmp.rows.push(presence_row(&Who::case(n), "", Status::New, "case not in BASE"));
+    }
+    for b in &base.volumes {
+        match new.volumes.iter().find(|n| same_volume(n, b)) {
+            Some(n) => compare_volume(&mut cmp.rows, &mut geo, n, b, thresholds, timing_gated),
+            None => cmp.rows.push(presence_row(&Who::volume(b), "", Status::Missing, "volume case not in NEW")),
+        }
+    }
+    for n in new.volumes.iter().filter(|n| !base.volumes.iter().any(|b| same_volume(n, b))) {
+        cmp.rows.push(presence_row(&Who::volume(n), "", Status::New, "volume case not in BASE"));
     }
     for ((structure, render, metric), logs) in geo {
         if logs.len() < 2 {
@@ -194,7 +236,11 @@ pub fn compare_with(new: &Results, base: &Results, thresholds: &Thresholds, gate
         let status = if timing_gated { judge_timing(change, change, threshold) } else { Status::Info };
         let note = if timing_gated { "" } else { "; not gated (the timing line below says why)" };
         cmp.rows.push(Row {
-            scene: format!("all {} scenes", logs.len()),
+            // A volume structure's mean runs over every source and transfer function.
+            scene: match render.ends_with("/volume") {
+                true => format!("all {} volume cases", logs.len()),
+                false => format!("all {} scenes", logs.len()),
+            },
             structure,
             render,
             metric: metric.into(),
@@ -229,10 +275,10 @@ fn render_name(r: &RenderStats) -> String {
     format!("{}/{}", r.backend, r.workload)
 }
 
-fn presence_row(c: &Case, render: &str, status: Status, note: &str) -> Row {
+fn presence_row(who: &Who, render: &str, status: Status, note: &str) -> Row {
     Row {
-        scene: c.scene.clone(),
-        structure: case_name(c),
+        scene: who.scene.clone(),
+        structure: who.name.clone(),
         render: render.into(),
         metric: "—".into(),
         base: None,
@@ -276,8 +322,9 @@ fn compare_case(
     gated: bool,
 ) {
     let ((n, new_run), (b, base_run)) = (new, base);
+    let who = Who::case(b);
     let mut det = |metric: &str, name: String, render: String, nv: f64, bv: f64| {
-        rows.push(deterministic_row(b, render, metric, name, nv, bv, th));
+        rows.push(deterministic_row(&who, render, metric, name, nv, bv, th));
     };
     det("triangles", "triangles".into(), String::new(), n.triangles as f64, b.triangles as f64);
     det("bytes", "bytes".into(), String::new(), n.memory.bytes as f64, b.memory.bytes as f64);
@@ -291,16 +338,16 @@ fn compare_case(
         let reference = reference_case(run, c).map(|r| &r.build.timing);
         TimingSide::of(&c.build.timing, c.build.reference_timing.as_ref(), reference, c.structure == REFERENCE)
     };
-    rows.push(timing_row(geo, b, String::new(), "build", build(n, new_run), build(b, base_run), th, gated));
+    rows.push(timing_row(geo, &who, String::new(), "build", build(n, new_run), build(b, base_run), th, gated));
 
     for br in &b.render {
         let name = render_name(br);
         let Some(nr) = n.render.iter().find(|r| r.backend == br.backend && r.workload == br.workload) else {
-            rows.push(presence_row(b, &name, Status::Missing, "render not in NEW"));
+            rows.push(presence_row(&who, &name, Status::Missing, "render not in NEW"));
             continue;
         };
         let mut det = |metric: &str, nv: f64, bv: f64| {
-            rows.push(deterministic_row(b, name.clone(), metric, metric.into(), nv, bv, th));
+            rows.push(deterministic_row(&who, name.clone(), metric, metric.into(), nv, bv, th));
         };
         det("steps_per_ray", nr.steps_per_ray_mean, br.steps_per_ray_mean);
         det("visits_per_ray", nr.node_visits_per_ray_mean, br.node_visits_per_ray_mean);
@@ -317,13 +364,52 @@ fn compare_case(
                 .map(|x| &x.timing);
             TimingSide::of(&r.timing, r.reference_timing.as_ref(), reference, c.structure == REFERENCE)
         };
-        rows.push(timing_row(geo, b, name.clone(), "render", side(n, nr, new_run), side(b, br, base_run), th, gated));
+        rows.push(timing_row(
+            geo,
+            &who,
+            name.clone(),
+            "render",
+            side(n, nr, new_run),
+            side(b, br, base_run),
+            th,
+            gated,
+        ));
     }
     for nr in
         n.render.iter().filter(|nr| !b.render.iter().any(|br| br.backend == nr.backend && br.workload == nr.workload))
     {
-        rows.push(presence_row(n, &render_name(nr), Status::New, "render not in BASE"));
+        rows.push(presence_row(&Who::case(n), &render_name(nr), Status::New, "render not in BASE"));
     }
+}
+
+/// The same volume case: source, transfer function, structure, backend and machine.
+fn same_volume(a: &VolumeCase, b: &VolumeCase) -> bool {
+    a.source == b.source
+        && a.transfer == b.transfer
+        && a.structure == b.structure
+        && a.backend == b.backend
+        && a.machine == b.machine
+}
+
+/// One volume case against its baseline: what it counts exactly — the shares of voxels and bricks
+/// the transfer function leaves visible (which must not move), samples and node visits per ray,
+/// bytes, pixels that differ from the dense image — and its render time as a ratio to the dense
+/// marcher's in the same rounds.
+fn compare_volume(rows: &mut Vec<Row>, geo: &mut Geo, n: &VolumeCase, b: &VolumeCase, th: &Thresholds, gated: bool) {
+    let who = Who::volume(b);
+    let render = format!("{}/volume", b.backend);
+    let mut det = |metric: &str, name: &str, nv: f64, bv: f64| {
+        rows.push(deterministic_row(&who, render.clone(), metric, name.into(), nv, bv, th));
+    };
+    det("occupancy", "visible_voxels", n.visible_voxels, b.visible_voxels);
+    det("occupancy", "occupied_bricks", n.occupied_bricks, b.occupied_bricks);
+    det("bytes", "bytes", n.bytes as f64, b.bytes as f64);
+    det("samples_per_ray", "samples_per_ray", n.samples_per_ray, b.samples_per_ray);
+    det("visits_per_ray", "visits_per_ray", n.visits_per_ray, b.visits_per_ray);
+    det("pixel_mismatches", "pixel_mismatches", n.mismatched_pixels as f64, b.mismatched_pixels as f64);
+    let side =
+        |v: &VolumeCase| TimingSide::of(&v.render, v.dense_timing.as_ref(), None, v.structure == VOLUME_REFERENCE);
+    rows.push(timing_row(geo, &who, render.clone(), "render", side(n), side(b), th, gated));
 }
 
 /// The `bvh` case of `c`'s scene in the same run (same machine tag), if it ran.
@@ -342,7 +428,7 @@ fn relative_change(new: f64, base: f64) -> f64 {
 }
 
 fn deterministic_row(
-    c: &Case,
+    who: &Who,
     render: String,
     metric: &str,
     name: String,
@@ -365,8 +451,8 @@ fn deterministic_row(
         _ => "deterministic",
     };
     Row {
-        scene: c.scene.clone(),
-        structure: case_name(c),
+        scene: who.scene.clone(),
+        structure: who.name.clone(),
         render,
         metric: name,
         base: Some(base),
@@ -468,7 +554,7 @@ fn seed_of(parts: &[&str]) -> u64 {
 #[allow(clippy::too_many_arguments)] // one row's identity, both sides and how to judge them
 fn timing_row(
     geo: &mut Geo,
-    c: &Case,
+    who: &Who,
     render: String,
     kind: &'static str,
     new: TimingSide,
@@ -478,8 +564,8 @@ fn timing_row(
 ) -> Row {
     let floor = th.floor_ms();
     let mut row = Row {
-        scene: c.scene.clone(),
-        structure: case_name(c),
+        scene: who.scene.clone(),
+        structure: who.name.clone(),
         render,
         metric: String::new(),
         base: None,
@@ -495,10 +581,11 @@ fn timing_row(
         (Some(_), Some(_)) if !new.paired.is_empty() && !base.paired.is_empty() => {
             let (nv, bv) = (median(&mut new.paired.clone()), median(&mut base.paired.clone()));
             let (lo, hi) =
-                bootstrap_change(&new.paired, &base.paired, seed_of(&[&c.scene, &case_name(c), &row.render, kind]));
+                bootstrap_change(&new.paired, &base.paired, seed_of(&[&who.scene, &who.name, &row.render, kind]));
             interval = Some((lo, hi));
             let basis = format!(
-                "median of per-rep ratios to bvh timed alongside; 95 % interval {}…{}",
+                "median of per-rep ratios to {} timed alongside; 95 % interval {}…{}",
+                who.reference,
                 table::fmt_change(lo),
                 table::fmt_change(hi)
             );
@@ -506,10 +593,10 @@ fn timing_row(
         }
         (Some((nr, np)), Some((br, bp))) => {
             let basis = match (np, bp) {
-                (true, true) => "ratio to bvh timed alongside (min of reps)",
-                _ => "ratio to this run's bvh case (min of reps)",
+                (true, true) => format!("ratio to {} timed alongside (min of reps)", who.reference),
+                _ => format!("ratio to this run's {} case (min of reps)", who.reference),
             };
-            (metric_name(kind, false), new.ms_min / nr, base.ms_min / br, basis.into())
+            (metric_name(kind, false), new.ms_min / nr, base.ms_min / br, basis)
         }
         _ if new.is_reference => {
             let raw = metric_name(kind, true);
@@ -522,7 +609,12 @@ fn timing_row(
                 format!("the reference itself: raw min-of-reps ms, not gated (threshold {raw} applies to others)");
             return row;
         }
-        _ => (metric_name(kind, true), new.ms_min, base.ms_min, "raw min-of-reps ms: no bvh reference in a run".into()),
+        _ => (
+            metric_name(kind, true),
+            new.ms_min,
+            base.ms_min,
+            format!("raw min-of-reps ms: no {} reference in a run", who.reference),
+        ),
     };
     let change = relative_change(nv, bv);
     let threshold = th.get(metric);
@@ -540,8 +632,11 @@ fn timing_row(
         row.status = if gated { judge_timing(lo, hi, threshold) } else { Status::Info };
         row.note = if gated { note } else { format!("{note}; not gated (the timing line below says why)") };
         if metric == kind && change.is_finite() && change > -1.0 {
-            let key =
-                (case_name(c), row.render.clone(), if kind == "build" { "build_geomean" } else { "render_geomean" });
+            let key = (
+                who.group.clone(),
+                row.render.clone(),
+                if kind == "build" { "build_geomean" } else { "render_geomean" },
+            );
             geo.entry(key).or_default().push((1.0 + change).ln());
         }
     }

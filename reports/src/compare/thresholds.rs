@@ -30,6 +30,11 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     ("hit_mismatches", Kind::Count, 0.0),
     ("prim_mismatches", Kind::Count, 0.0),
     ("rays_at_bound", Kind::Count, 0.0),
+    // Volume cases (the volume workload): the shares of voxels and bricks a transfer function
+    // leaves visible, samples per ray, and pixels that differ from the dense marcher's image.
+    ("occupancy", Kind::Exact, 1e-9),
+    ("samples_per_ray", Kind::Count, 1e-6),
+    ("pixel_mismatches", Kind::Count, 0.0),
     // Per case, judged on the 95 % interval of the change (README "Regression gate"): unchanged
     // reruns on a shared 2-core VM moved single render ratios by up to 25 % and build ratios by up
     // to 62 % (allocation-heavy builds are bimodal), so a single case fails when its render surely
