@@ -9,6 +9,7 @@ use glam::Vec3;
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
 use kernels::volume::octree::MinMaxOctree;
+use kernels::volume::vdb::Vdb;
 use kernels::volume::{Histogram, TransferFunction, VOLUME_STRUCTURES, VolumeImage, render};
 use scenes::{Camera, CameraSpec, Samples, Volume};
 
@@ -16,24 +17,42 @@ const SIZE: u32 = 72;
 
 /// A sparse field: a few Gaussian blobs in an empty box (values 0..1).
 fn blobs(n: u32) -> Volume {
+    blobs_in([n; 3], [1.0; 3])
+}
+
+/// [`blobs`] in a box of `dims` voxels `spacing` apart (the blobs placed in the box's own unit
+/// cube, so they stretch with it).
+fn blobs_in(dims: [u32; 3], spacing: [f32; 3]) -> Volume {
     let centres = [Vec3::new(0.3, 0.4, 0.5), Vec3::new(0.7, 0.6, 0.3), Vec3::new(0.5, 0.2, 0.8)];
-    let mut samples = Vec::with_capacity((n * n * n) as usize);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
+    let mut samples = Vec::with_capacity((dims[0] * dims[1] * dims[2]) as usize);
+    let last = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) - 1.0;
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let p = Vec3::new(x as f32, y as f32, z as f32) / last;
                 let v: f32 = centres.iter().map(|c| (-(p - *c).length_squared() / 0.004).exp()).sum();
                 samples.push(if v < 1e-3 { 0.0 } else { v.min(1.0) });
             }
         }
     }
-    Volume {
-        name: "blobs".into(),
-        dims: [n; 3],
-        spacing: [1.0; 3],
-        samples: Samples::F32(samples),
-        source: "test".into(),
+    Volume { name: "blobs".into(), dims, spacing, samples: Samples::F32(samples), source: "test".into() }
+}
+
+/// Three balls of 6 voxels' radius (value 200 inside, 0 elsewhere) in an empty `u8` box of `dims`
+/// voxels `spacing` apart.
+fn specks(dims: [u32; 3], spacing: [f32; 3]) -> Volume {
+    let centres = [[0.2, 0.3, 0.4], [0.8, 0.7, 0.5], [0.5, 0.5, 0.9]]
+        .map(|c: [f32; 3]| Vec3::new(c[0] * dims[0] as f32, c[1] * dims[1] as f32, c[2] * dims[2] as f32));
+    let mut samples = Vec::with_capacity((dims[0] * dims[1] * dims[2]) as usize);
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let p = Vec3::new(x as f32, y as f32, z as f32);
+                samples.push(if centres.iter().any(|c| p.distance(*c) <= 6.0) { 200u8 } else { 0 });
+            }
+        }
     }
+    Volume { name: "specks".into(), dims, spacing, samples: Samples::U8(samples), source: "test".into() }
 }
 
 /// Transfer functions over `volume`'s values `[lo, hi]`: nothing empty, a quarter, most, almost
@@ -142,6 +161,41 @@ fn bricks_give_the_dense_image_on_the_mri_scan() {
     }
 }
 
+/// The vdb tree where it has several internal nodes (128³ voxels) along each axis that has more
+/// than 128 voxels, with unequal spacings: the dense image through every structure, and on a
+/// sparse field fewer node visits than the brick map's (from outside, under half), since its
+/// empty internal nodes are stepped over whole.
+#[test]
+fn the_vdb_steps_over_empty_internal_nodes_and_keeps_the_dense_image() {
+    let v = blobs_in([300, 40, 140], [1.0, 2.0, 0.5]);
+    check(&v);
+    let (lo, hi) = v.value_range();
+    let vdb = Vdb::build(&v, &TransferFunction::ramp(lo, hi, 0.25, 0.6));
+    assert_eq!(vdb.level_res(), [[3, 1, 2], [1, 1, 1]], "bricks {:?}", vdb.bricks.res);
+    // Specks in a box of 4 × 3 × 3 internal nodes, most of them empty.
+    let v = specks([400, 300, 260], [1.0, 1.5, 1.0]);
+    check(&v);
+    let tf = TransferFunction::ramp(0.0, 255.0, 0.25, 0.6);
+    let vdb = Vdb::build(&v, &tf);
+    assert_eq!(vdb.level_res()[0], [4, 3, 3]);
+    let bricks = Bricks::build(&v, &tf);
+    for (name, camera) in cameras(&v) {
+        let (through_bricks, through_vdb) =
+            (render(&bricks, &v, &tf, &camera, 0.5), render(&vdb, &v, &tf, &camera, 0.5));
+        assert_eq!(bits(&through_bricks), bits(&through_vdb), "{name}");
+        assert_eq!(through_bricks.samples, through_vdb.samples, "{name}: the same non-empty bricks");
+        // From outside most rays cross only empty internal nodes; from inside, the eye's own
+        // node and its neighbour hold specks, so fewer are stepped over.
+        let factor = if name == "outside" { 2 } else { 1 };
+        assert!(
+            through_vdb.visits * factor < through_bricks.visits,
+            "{name}: the vdb visits {} nodes, the bricks {}",
+            through_vdb.visits,
+            through_bricks.visits
+        );
+    }
+}
+
 /// A new transfer function re-derives emptiness from the stored ranges: the same bricks and
 /// the same image as a build with it.
 #[test]
@@ -161,6 +215,15 @@ fn a_transfer_function_change_equals_a_rebuild() {
             let tree_rebuilt = MinMaxOctree::build(&v, b);
             let (one, two) = (render(&tree, &v, b, &camera, 0.5), render(&tree_rebuilt, &v, b, &camera, 0.5));
             assert_eq!((bits(&one), one.samples), (bits(&two), two.samples), "octree {from} -> {to}");
+            let mut vdb = Vdb::build(&v, a);
+            vdb.set_transfer_function(b);
+            let vdb_rebuilt = Vdb::build(&v, b);
+            let (one, two) = (render(&vdb, &v, b, &camera, 0.5), render(&vdb_rebuilt, &v, b, &camera, 0.5));
+            assert_eq!(
+                (bits(&one), one.samples, one.visits),
+                (bits(&two), two.samples, two.visits),
+                "vdb {from} -> {to}"
+            );
         }
     }
 }

@@ -91,6 +91,14 @@ impl Bricks {
     pub(super) fn face(&self, a: usize, i: u32) -> f32 {
         (i * BRICK).min(self.cells[a]) as f32 * self.spacing[a]
     }
+
+    /// On axis `a`, the unit of `2^shift` bricks holding position `p`, clamped to the units that
+    /// exist (`shift` 0: the brick, as [`Bricks`]'s own walk finds its start).
+    #[inline]
+    pub(super) fn unit_at(&self, a: usize, p: f32, shift: u32) -> u32 {
+        let u = p / (self.spacing[a] * (BRICK << shift) as f32);
+        u.clamp(0.0, ((self.res[a] - 1) >> shift) as f32) as u32
+    }
 }
 
 impl VolumeStructure for Bricks {
@@ -121,8 +129,7 @@ impl VolumeMarch for Bricks {
         let mut step = [0i64; 3];
         let mut t_next = [f32::INFINITY; 3];
         for a in 0..3 {
-            let u = p[a] / (self.spacing[a] * BRICK as f32);
-            cell[a] = u.clamp(0.0, (self.res[a] - 1) as f32) as u32;
+            cell[a] = self.unit_at(a, p[a], 0);
             if inv[a].is_finite() && d[a] != 0.0 {
                 step[a] = if d[a] > 0.0 { 1 } else { -1 };
                 let face = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] };

@@ -18,7 +18,8 @@
 //!
 //! Structures ([`VOLUME_STRUCTURES`], what the harness's `volume` workload measures): [`dense`]
 //! (no skipping), [`bricks`] (a min/max value range per brick of voxels, emptiness re-derived from
-//! a new transfer function without a rebuild) and [`octree`] (a min/max tree over the bricks).
+//! a new transfer function without a rebuild), [`octree`] (a min/max tree over the bricks) and
+//! [`vdb`] (OpenVDB's 5-4-3 tree over the bricks, walked by a hierarchical DDA).
 //!
 //! **Transfer functions by occupancy.** [`Histogram`] fits a ramp to a volume so that a chosen
 //! fraction of its voxels is visible ([`Histogram::threshold_for`]): how the harness sweeps from
@@ -27,6 +28,7 @@
 pub mod bricks;
 pub mod dense;
 pub mod octree;
+pub mod vdb;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -360,6 +362,11 @@ pub const VOLUME_STRUCTURES: &[VolumeEntry] = &[
         name: "octree",
         summary: "min/max octree over the bricks (seed 003's N³-tree, N = 2)",
         build: |v, tf| Box::new(octree::MinMaxOctree::build(v, tf)),
+    },
+    VolumeEntry {
+        name: "vdb",
+        summary: "OpenVDB's 5-4-3 tree over the bricks (16³ bricks, then 32³ of those), walked by a hierarchical DDA",
+        build: |v, tf| Box::new(vdb::Vdb::build(v, tf)),
     },
 ];
 

@@ -93,10 +93,11 @@ impl MinMaxOctree {
         }
     }
 
-    /// Bytes of the ranges and emptiness of every level, the bricks' included.
+    /// Bytes as stored: the bricks' ranges and emptiness, and per node its range, emptiness and
+    /// fullness.
     pub fn bytes(&self) -> u64 {
-        self.bricks.bytes()
-            + self.levels.iter().map(|l| (l.ranges.len() * size_of::<(f32, f32)>() + l.empty.len()) as u64).sum::<u64>()
+        let node = size_of::<(f32, f32)>() + 2 * size_of::<bool>();
+        self.bricks.bytes() + self.levels.iter().map(|l| (l.ranges.len() * node) as u64).sum::<u64>()
     }
 
     /// The levels above the bricks, finest first: each one's resolution, and per node (x fastest)
