@@ -315,6 +315,8 @@ fn the_gpu_kernel_gives_the_cpu_image() {
         wide,
         scenes::load_volume("particles@48:20", 1 << 30).expect("builds"),
         scenes::load_volume("marschner-lobb@33", 1 << 30).expect("builds"),
+        // Several of the vdb's internal nodes along x, some of them empty.
+        specks([300, 150, 140], [1.0, 1.5, 1.0]),
     ];
     let opts = kernels::gpu::DispatchOptions { warmup: 0, reps: 1, ..Default::default() };
     for volume in &sources {
@@ -322,12 +324,14 @@ fn the_gpu_kernel_gives_the_cpu_image() {
         for (tf_name, tf) in transfer_functions(volume).into_iter().filter(|(n, _)| !n.starts_with("ramp 60")) {
             let bricks = Bricks::build(volume, &tf);
             let octree = MinMaxOctree::build(volume, &tf);
+            let vdb = Vdb::build(volume, &tf);
             for (cam_name, camera) in cameras(volume) {
                 let dense = render(&Dense, volume, &tf, &camera, step);
                 for (name, walk, cpu) in [
                     ("dense", GpuVolume::Dense, dense.clone()),
                     ("bricks", GpuVolume::Bricks(&bricks), render(&bricks, volume, &tf, &camera, step)),
                     ("octree", GpuVolume::Octree(&octree), render(&octree, volume, &tf, &camera, step)),
+                    ("vdb", GpuVolume::Vdb(&vdb), render(&vdb, volume, &tf, &camera, step)),
                 ] {
                     let what = format!("{} {tf_name} {cam_name} {name}", volume.name);
                     let gpu = render_volume(ctx, volume, &walk, &tf, &camera, step, &opts).expect(&what).image;
@@ -338,7 +342,8 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                         .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
                         .fold(0.0f32, f32::max);
                     assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
-                    if name == "octree" {
+                    if name == "octree" || name == "vdb" {
+                        // The trees' GPU walk cuts its own spans (a descent per span).
                         assert!(gpu.samples <= dense.samples && gpu.visits > 0, "{what}");
                     } else {
                         assert_eq!((gpu.samples, gpu.visits), (cpu.samples, cpu.visits), "{what}");

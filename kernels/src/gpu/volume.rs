@@ -14,6 +14,7 @@ use super::{DispatchOptions, GpuContext, GpuError, GpuRun, run_program};
 use crate::cpu::render::Frame;
 use crate::volume::bricks::Bricks;
 use crate::volume::octree::MinMaxOctree;
+use crate::volume::vdb::Vdb;
 use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
 
 pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.wgsl"));
@@ -23,6 +24,7 @@ pub enum GpuVolume<'a> {
     Dense,
     Bricks(&'a Bricks),
     Octree(&'a MinMaxOctree),
+    Vdb(&'a Vdb),
 }
 
 impl<'a> GpuVolume<'a> {
@@ -39,6 +41,7 @@ impl<'a> GpuVolume<'a> {
                 .as_octree()
                 .map(GpuVolume::Octree)
                 .ok_or_else(|| "the octree entry built no octree".to_string()),
+            "vdb" => structure.as_vdb().map(GpuVolume::Vdb).ok_or_else(|| "the vdb entry built no vdb".to_string()),
             other => Err(format!("'{other}' has no GPU kernel")),
         }
     }
@@ -64,6 +67,8 @@ const M_POINTS: usize = 18;
 const M_DOMAIN: usize = 19;
 /// The header's words before the transfer function's points (`M_TF`).
 const HEADER_WORDS: usize = 32;
+/// Words per level of the `tree` buffer: resolution, empty and full bit offsets, shift.
+const TREE_LEVEL_WORDS: u32 = 6;
 
 /// Casts `camera`'s rays through `volume` with `walk` on the GPU, sampling every `step` under
 /// `tf`.
@@ -102,6 +107,7 @@ pub fn render_volume(
         GpuVolume::Dense => (0, None),
         GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
         GpuVolume::Octree(tree) => (2, Some(&tree.bricks)),
+        GpuVolume::Vdb(tree) => (2, Some(&tree.bricks)),
     };
     header[M_MODE] = mode;
     let mut empty = Vec::new();
@@ -110,19 +116,23 @@ pub fn render_volume(
         header[M_CELLS..M_CELLS + 3].copy_from_slice(&bricks.cells());
         empty = bits(&bricks.empty);
     }
+    let levels: Vec<_> = match walk {
+        GpuVolume::Octree(octree) => octree.levels().collect(),
+        GpuVolume::Vdb(vdb) => vdb.levels().collect(),
+        GpuVolume::Dense | GpuVolume::Bricks(_) => Vec::new(),
+    };
     let mut tree = Vec::new();
-    if let GpuVolume::Octree(octree) = walk {
-        let levels: Vec<_> = octree.levels().collect();
+    if !levels.is_empty() {
         tree = vec![levels.len() as u32];
         let mut tables = Vec::new();
-        let start = 1 + 5 * levels.len() as u32;
-        for (res, empty, full) in levels {
+        let start = 1 + TREE_LEVEL_WORDS * levels.len() as u32;
+        for (res, empty, full, shift) in levels {
             let empty_at = start + tables.len() as u32;
             tables.extend(bits(empty));
             let full_at = start + tables.len() as u32;
             tables.extend(bits(full));
             tree.extend(res);
-            tree.extend([empty_at, full_at]);
+            tree.extend([empty_at, full_at, shift]);
         }
         tree.extend(tables);
     }
@@ -198,6 +208,7 @@ mod tests {
             ("M_POINTS", M_POINTS),
             ("M_DOMAIN", M_DOMAIN),
             ("M_TF", HEADER_WORDS),
+            ("TREE_LEVEL_WORDS", TREE_LEVEL_WORDS as usize),
         ] {
             assert!(wgsl.contains(&format!("const {name}: u32 = {at}u;")), "{name} = {at}");
         }

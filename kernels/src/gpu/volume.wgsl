@@ -1,20 +1,21 @@
 // Volume ray casting (issue 32), the WGSL twin of kernels/src/volume: front-to-back
 // emission–absorption compositing through a piecewise-linear transfer function, samples on the
 // global lattice t_k = k · step, trilinear reads, early termination below MIN_TRANSMITTANCE; the
-// dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1), or the min/max
-// octree (mode 2). Every sample is the CPU's operations in the CPU's order, so a device that
-// rounds as the CPU does (lavapipe) gives the CPU's image. The dense and brick walks hand over
-// the CPU's very spans; the octree walk is not the CPU's recursion (a GPU thread has no call
-// stack) but a descent from the root at each span's start, so its spans tile the ray
-// differently — the same samples all the same, as any tiling that skips only transparent spans
-// takes them.
+// dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1), or a tree over the
+// bricks (mode 2: the min/max octree, or the vdb tree). Every sample is the CPU's operations in
+// the CPU's order, so a device that rounds as the CPU does (lavapipe) gives the CPU's image. The
+// dense and brick walks hand over the CPU's very spans; the tree walk is not the CPU's recursion
+// (a GPU thread has no call stack) but a descent from the root at each span's start, so its spans
+// tile the ray differently — the same samples all the same, as any tiling that skips only
+// transparent spans takes them.
 //
 // Buffers (kernels/src/gpu/volume.rs): `vol` the samples packed into words (u8: four a word, u16:
 // two, f32: one, x fastest); `header` the header below, then the transfer function's points, five
 // words each (value, r, g, b, a); `empty` one bit per brick (modes 1 and 2); `tree` (mode 2) the
-// levels above the bricks, finest first: word 0 their count, then per level five words (its
-// resolution, and the word offsets in `tree` of its empty bits and of its full bits: no empty
-// brick below), then the bits.
+// levels above the bricks, finest first: word 0 their count, then per level TREE_LEVEL_WORDS
+// words (its resolution, the word offsets in `tree` of its empty bits and of its full bits: no
+// empty brick below, and log2 of its nodes' width in bricks: the octree's level, the vdb's 4 and
+// 9), then the bits.
 //
 // The answer per ray: premultiplied RGB and opacity 1 − T as four f32 words in `scratch` at
 // 4 · index; the hit's prim words carry the samples taken and the bricks visited.
@@ -34,6 +35,9 @@ const M_CELLS: u32 = 15u;      // 3 words: voxel cells per axis
 const M_POINTS: u32 = 18u;     // transfer-function points
 const M_DOMAIN: u32 = 19u;     // 3 f32: the far corner of the voxel centres' box
 const M_TF: u32 = 32u;         // first point
+
+// Words per level of `tree`.
+const TREE_LEVEL_WORDS: u32 = 6u;
 
 fn header_f(i: u32) -> f32 {
     return bitcast<f32>(header(i));
@@ -228,12 +232,12 @@ fn tree_bit(offset: u32, index: u32) -> bool {
     return ((tree(offset + index / 32u) >> (index % 32u)) & 1u) != 0u;
 }
 
-// The min/max octree: from the span's start, the node the ray is in is found by descending from
-// the root until a node is empty (skipped to its exit), full (taken to its exit) or a brick (as
-// the brick map judges it). A start that rounds into a node the ray is leaving takes the sliver
+// A tree over the bricks (the min/max octree, the vdb tree): from the span's start, the node the
+// ray is in is found by descending from the root until a node is empty (skipped to its exit),
+// full (taken to its exit) or a brick (as the brick map judges it). A start that rounds into a node the ray is leaving takes the sliver
 // up to the next lattice sample: taking is never wrong, only skipping must be safe, and the
 // bricks' value ranges reach past their faces, which covers a start rounded across one.
-fn march_octree(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
+fn march_tree(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
     let o = ray.origin;
     let d = ray.dir + vec3<f32>(0.0);
     let inv = reciprocal(ray.dir);
@@ -254,14 +258,17 @@ fn march_octree(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
         }
         // The coarsest node that settles the span: empty, full, or a brick.
         var level = depth;
+        var shift = 0u;
         var take_it = false;
         loop {
-            let node = brick >> vec3<u32>(level);
             if (level == 0u) {
-                take_it = !brick_empty(node.x + res.x * (node.y + res.y * node.z));
+                shift = 0u;
+                take_it = !brick_empty(brick.x + res.x * (brick.y + res.y * brick.z));
                 break;
             }
-            let at = 1u + 5u * (level - 1u);
+            let at = 1u + TREE_LEVEL_WORDS * (level - 1u);
+            shift = tree(at + 5u);
+            let node = brick >> vec3<u32>(shift);
             let index = node.x + tree(at) * (node.y + tree(at + 1u) * node.z);
             if (tree_bit(tree(at + 3u), index)) {
                 break;
@@ -274,13 +281,13 @@ fn march_octree(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
         }
         (*c).visits += 1u;
         // The node's exit: its far face on each axis the ray moves along.
-        let node = brick >> vec3<u32>(level);
+        let node = brick >> vec3<u32>(shift);
         var end = t1;
         for (var a = 0u; a < 3u; a++) {
             if (abs(inv[a]) <= F32_MAX && d[a] != 0.0) {
-                var face = node[a] << level;
+                var face = node[a] << shift;
                 if (d[a] > 0.0) {
-                    face = (node[a] + 1u) << level;
+                    face = (node[a] + 1u) << shift;
                 }
                 end = min(end, (brick_face(a, face) - o[a]) * inv[a]);
             }
@@ -312,7 +319,7 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
                 march_bricks(&c, ray, span.x, span.y);
             }
             default: {
-                march_octree(&c, ray, span.x, span.y);
+                march_tree(&c, ray, span.x, span.y);
             }
         }
     }

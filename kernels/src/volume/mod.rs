@@ -337,6 +337,10 @@ pub trait VolumeStructure: VolumeMarch + Send {
     fn as_octree(&self) -> Option<&octree::MinMaxOctree> {
         None
     }
+    /// The structure as a VDB tree, for the GPU kernel's tree walk; `None` for any other.
+    fn as_vdb(&self) -> Option<&vdb::Vdb> {
+        None
+    }
 }
 
 /// A volume structure by name: what `harness list` shows and how to build it.

@@ -100,10 +100,11 @@ impl MinMaxOctree {
         self.bricks.bytes() + self.levels.iter().map(|l| (l.ranges.len() * node) as u64).sum::<u64>()
     }
 
-    /// The levels above the bricks, finest first: each one's resolution, and per node (x fastest)
-    /// whether it is empty and whether no brick below it is empty (the GPU kernel's tables).
-    pub fn levels(&self) -> impl Iterator<Item = ([u32; 3], &[bool], &[bool])> {
-        self.levels.iter().map(|l| (l.res, l.empty.as_slice(), l.full.as_slice()))
+    /// The levels above the bricks, finest first: each one's resolution, per node (x fastest)
+    /// whether it is empty and whether no brick below it is empty, and log2 of its nodes' width
+    /// in bricks (the GPU kernel's tables).
+    pub fn levels(&self) -> impl Iterator<Item = ([u32; 3], &[bool], &[bool], u32)> {
+        self.levels.iter().zip(1..).map(|(l, shift)| (l.res, l.empty.as_slice(), l.full.as_slice(), shift))
     }
 
     /// Levels above the bricks.

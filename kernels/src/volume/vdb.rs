@@ -14,8 +14,10 @@
 //! the cursor, clamped into its parent, and a rounding-sized sliver that lands in a neighbour is
 //! covered by that neighbour's range, which reaches two voxels past its faces.
 //!
-//! The CPU walk only: the WGSL twin is still to come (issue 32), so the harness's GPU backend
-//! reports `vdb` as unavailable.
+//! WGSL twin: `kernels/src/gpu/volume.wgsl`'s tree walk, shared with the octree: not this
+//! recursion of DDAs (a GPU thread has no call stack) but, at each span's start, a descent from
+//! the upper node the ray is in to the first node that settles the span (empty, full or a brick);
+//! other spans, the same samples, the same image.
 
 use scenes::{Ray, Volume};
 
@@ -124,6 +126,14 @@ impl Vdb {
         [self.levels[0].res, self.levels[1].res]
     }
 
+    /// The levels above the bricks, finest first, as [`MinMaxOctree::levels`] gives its own: the
+    /// GPU kernel walks either tree by the same descent.
+    ///
+    /// [`MinMaxOctree::levels`]: super::octree::MinMaxOctree::levels
+    pub fn levels(&self) -> impl Iterator<Item = ([u32; 3], &[bool], &[bool], u32)> {
+        self.levels.iter().zip(&SHIFT[1..]).map(|(l, &shift)| (l.res, l.empty.as_slice(), l.full.as_slice(), shift))
+    }
+
     /// Node `c` of `level` (0: a brick) over the span `[*cursor, end)`: skipped when empty, taken
     /// whole when full (a brick that is not empty is full), else its children walked. `false`
     /// once the ray has terminated.
@@ -223,8 +233,8 @@ impl VolumeStructure for Vdb {
         Some(self.bricks.occupancy())
     }
 
-    fn as_bricks(&self) -> Option<&Bricks> {
-        Some(&self.bricks)
+    fn as_vdb(&self) -> Option<&Vdb> {
+        Some(self)
     }
 }
 
