@@ -8,6 +8,7 @@
 //! inlined in HTML, so it carries no `xmlns` either.
 
 use plotters::coord::Shift;
+use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -299,32 +300,19 @@ pub fn scaling(study: &Study) -> Result<String, PlotError> {
         Axis::Resolution => pow2_ticks(xr.0, xr.1),
     };
     svg(&study.title, SCALING_SIZE, &legend, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(&study.title, TITLE_FONT)
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(
-                (xr.0..xr.1).log_scale().with_key_points(x_ticks),
-                (yr.0..yr.1).log_scale().with_key_points(match y_is_bytes {
-                    true => byte_ticks(yr.0, yr.1),
-                    false => log_ticks(yr.0, yr.1),
-                }),
-            )
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(study.y_label)
-            .label_style(LABEL_FONT)
-            .axis_desc_style(LABEL_FONT)
-            .x_label_formatter(&|x| match study.x {
-                Axis::Triangles => si(*x),
-                Axis::Resolution => format!("{:.0}", x),
-            })
-            .y_label_formatter(&|y| if y_is_bytes { bytes(*y) } else { si(*y) })
-            .draw()
-            .map_err(e)?;
+        let x_label = |x: &f64| match study.x {
+            Axis::Triangles => si(*x),
+            Axis::Resolution => format!("{:.0}", x),
+        };
+        let y_label = |y: &f64| if y_is_bytes { bytes(*y) } else { si(*y) };
+        let y_ticks = if y_is_bytes { byte_ticks(yr.0, yr.1) } else { log_ticks(yr.0, yr.1) };
+        let mut chart = log_log_frame(
+            root,
+            &study.title,
+            70,
+            LogAxis { range: xr, ticks: x_ticks, desc: x_desc, label: &x_label },
+            LogAxis { range: yr, ticks: y_ticks, desc: study.y_label, label: &y_label },
+        )?;
         for (i, s) in study.series.iter().enumerate() {
             let c = color(i);
             chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2))).map_err(e)?;
@@ -369,26 +357,13 @@ pub fn speed_memory(title: &str, choices: &[Choice]) -> Result<String, PlotError
         .collect();
     legend.push(Entry { label: "Pareto front".into(), color: RGBColor(60, 60, 60), marker: Marker::Line });
     svg(title, SCALING_SIZE, &legend, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, TITLE_FONT)
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(
-                (xr.0..xr.1).log_scale().with_key_points(byte_ticks(xr.0, xr.1)),
-                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
-            )
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .x_desc("memory")
-            .y_desc("Mrays/s")
-            .label_style(LABEL_FONT)
-            .axis_desc_style(LABEL_FONT)
-            .x_label_formatter(&|x| bytes(*x))
-            .y_label_formatter(&|y| significant(*y))
-            .draw()
-            .map_err(e)?;
+        let mut chart = log_log_frame(
+            root,
+            title,
+            60,
+            LogAxis { range: xr, ticks: byte_ticks(xr.0, xr.1), desc: "memory", label: &|x| bytes(*x) },
+            LogAxis { range: yr, ticks: log_ticks(yr.0, yr.1), desc: "Mrays/s", label: &|y| significant(*y) },
+        )?;
         let line: Vec<(f64, f64)> = front.iter().map(|c| (c.bytes, c.mrays_per_s)).collect();
         chart.draw_series(LineSeries::new(line, RGBColor(60, 60, 60).stroke_width(1))).map_err(e)?;
         let style = ("sans-serif", 11).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Bottom));
@@ -445,26 +420,14 @@ pub fn speed_up_occupancy(title: &str, series: &[SpeedUps], published: &[Publish
         marker: Marker::Cross,
     }));
     svg(title, SCALING_SIZE, &legend, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, TITLE_FONT)
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(
-                (xr.0..xr.1).log_scale().with_key_points(log_ticks(xr.0, xr.1)),
-                (yr.0..yr.1).log_scale().with_key_points(log_ticks(yr.0, yr.1)),
-            )
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .x_desc("visible voxels (%)")
-            .y_desc("× dense marcher")
-            .label_style(LABEL_FONT)
-            .axis_desc_style(LABEL_FONT)
-            .x_label_formatter(&|x| significant(*x))
-            .y_label_formatter(&|y| significant(*y))
-            .draw()
-            .map_err(e)?;
+        let label = |v: &f64| significant(*v);
+        let mut chart = log_log_frame(
+            root,
+            title,
+            60,
+            LogAxis { range: xr, ticks: log_ticks(xr.0, xr.1), desc: "visible voxels (%)", label: &label },
+            LogAxis { range: yr, ticks: log_ticks(yr.0, yr.1), desc: "× dense marcher", label: &label },
+        )?;
         chart.draw_series(DashedLineSeries::new([(xr.0, 1.0), (xr.1, 1.0)], 6, 4, gray.stroke_width(1))).map_err(e)?;
         for (i, s) in series.iter().enumerate() {
             let c = color(i);
@@ -492,6 +455,49 @@ fn pareto_front<'a>(points: &[&'a Choice]) -> Vec<&'a Choice> {
         }
     }
     front
+}
+
+/// One log axis of a chart: its range, its ticks, what it measures and how a tick reads.
+struct LogAxis<'f> {
+    range: (f64, f64),
+    ticks: Vec<f64>,
+    desc: &'f str,
+    label: &'f dyn Fn(&f64) -> String,
+}
+
+type LogLogChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<WithKeyPoints<LogCoord<f64>>, WithKeyPoints<LogCoord<f64>>>>;
+
+/// The frame every log–log chart shares: caption, both axes log-scaled with ticks at `x.ticks` and
+/// `y.ticks`, the mesh with the axes' descriptions; `y_area` pixels for the y labels.
+fn log_log_frame<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    title: &str,
+    y_area: u32,
+    x: LogAxis,
+    y: LogAxis,
+) -> Result<LogLogChart<'a, 'b>, String> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, TITLE_FONT)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(y_area)
+        .build_cartesian_2d(
+            (x.range.0..x.range.1).log_scale().with_key_points(x.ticks),
+            (y.range.0..y.range.1).log_scale().with_key_points(y.ticks),
+        )
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x.desc)
+        .y_desc(y.desc)
+        .label_style(LABEL_FONT)
+        .axis_desc_style(LABEL_FONT)
+        .x_label_formatter(x.label)
+        .y_label_formatter(y.label)
+        .draw()
+        .map_err(e)?;
+    Ok(chart)
 }
 
 type BarChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
