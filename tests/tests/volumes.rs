@@ -8,8 +8,8 @@
 use glam::Vec3;
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
+use kernels::volume::ntree::NTree;
 use kernels::volume::octree::MinMaxOctree;
-use kernels::volume::vdb::Vdb;
 use kernels::volume::{Histogram, TransferFunction, VOLUME_STRUCTURES, VolumeImage, render};
 use scenes::{Camera, CameraSpec, Samples, Volume};
 
@@ -54,6 +54,9 @@ fn specks(dims: [u32; 3], spacing: [f32; 3]) -> Volume {
     }
     Volume { name: "specks".into(), dims, spacing, samples: Samples::U8(samples), source: "test".into() }
 }
+
+/// An N³-tree's builder ([`NTree::vdb`], [`NTree::tree64`]).
+type TreeBuild = fn(&Volume, &TransferFunction) -> NTree;
 
 /// Transfer functions over `volume`'s values `[lo, hi]`: nothing empty, a quarter, most, almost
 /// all, all; one rising from the least value (regions of that value empty, all others visible); and
@@ -161,38 +164,44 @@ fn bricks_give_the_dense_image_on_the_mri_scan() {
     }
 }
 
-/// The vdb tree where it has several internal nodes (128³ voxels) along each axis that has more
-/// than 128 voxels, with unequal spacings: the dense image through every structure, and on a
-/// sparse field fewer node visits than the brick map's (from outside, under half), since its
-/// empty internal nodes are stepped over whole.
+/// The N³-trees (`vdb`, `tree64`) where the vdb has several internal nodes (128³ voxels) along each
+/// axis that has more than 128 voxels and the 64-tree three levels, with unequal spacings: the
+/// dense image through every structure, and on a sparse field fewer node visits than the brick
+/// map's (from outside, under half), since their empty nodes are stepped over whole.
 #[test]
-fn the_vdb_steps_over_empty_internal_nodes_and_keeps_the_dense_image() {
+fn the_trees_step_over_empty_nodes_and_keep_the_dense_image() {
     let v = blobs_in([300, 40, 140], [1.0, 2.0, 0.5]);
     check(&v);
     let (lo, hi) = v.value_range();
-    let vdb = Vdb::build(&v, &TransferFunction::ramp(lo, hi, 0.25, 0.6));
+    let ramp = TransferFunction::ramp(lo, hi, 0.25, 0.6);
+    let vdb = NTree::vdb(&v, &ramp);
     assert_eq!(vdb.level_res(), [[3, 1, 2], [1, 1, 1]], "bricks {:?}", vdb.bricks.res);
+    // The 64-tree over 38 × 5 × 18 bricks: 10 × 2 × 5, 3 × 1 × 2, 1 × 1 × 1.
+    assert_eq!(NTree::tree64(&v, &ramp).level_res(), [[10, 2, 5], [3, 1, 2], [1, 1, 1]]);
     // Specks in a box of 4 × 3 × 3 internal nodes, most of them empty.
     let v = specks([400, 300, 260], [1.0, 1.5, 1.0]);
     check(&v);
     let tf = TransferFunction::ramp(0.0, 255.0, 0.25, 0.6);
-    let vdb = Vdb::build(&v, &tf);
+    let vdb = NTree::vdb(&v, &tf);
     assert_eq!(vdb.level_res()[0], [4, 3, 3]);
+    let tree64 = NTree::tree64(&v, &tf);
     let bricks = Bricks::build(&v, &tf);
     for (name, camera) in cameras(&v) {
-        let (through_bricks, through_vdb) =
-            (render(&bricks, &v, &tf, &camera, 0.5), render(&vdb, &v, &tf, &camera, 0.5));
-        assert_eq!(bits(&through_bricks), bits(&through_vdb), "{name}");
-        assert_eq!(through_bricks.samples, through_vdb.samples, "{name}: the same non-empty bricks");
-        // From outside most rays cross only empty internal nodes; from inside, the eye's own
-        // node and its neighbour hold specks, so fewer are stepped over.
-        let factor = if name == "outside" { 2 } else { 1 };
-        assert!(
-            through_vdb.visits * factor < through_bricks.visits,
-            "{name}: the vdb visits {} nodes, the bricks {}",
-            through_vdb.visits,
-            through_bricks.visits
-        );
+        let through_bricks = render(&bricks, &v, &tf, &camera, 0.5);
+        for (shape, tree) in [("vdb", &vdb), ("tree64", &tree64)] {
+            let through = render(tree, &v, &tf, &camera, 0.5);
+            assert_eq!(bits(&through_bricks), bits(&through), "{name} {shape}");
+            assert_eq!(through_bricks.samples, through.samples, "{name} {shape}: the same non-empty bricks");
+            // From outside most rays cross only empty nodes; from inside, the eye's own node and
+            // its neighbour hold specks, so fewer are stepped over.
+            let factor = if name == "outside" { 2 } else { 1 };
+            assert!(
+                through.visits * factor < through_bricks.visits,
+                "{name}: {shape} visits {} nodes, the bricks {}",
+                through.visits,
+                through_bricks.visits
+            );
+        }
     }
 }
 
@@ -215,15 +224,17 @@ fn a_transfer_function_change_equals_a_rebuild() {
             let tree_rebuilt = MinMaxOctree::build(&v, b);
             let (one, two) = (render(&tree, &v, b, &camera, 0.5), render(&tree_rebuilt, &v, b, &camera, 0.5));
             assert_eq!((bits(&one), one.samples), (bits(&two), two.samples), "octree {from} -> {to}");
-            let mut vdb = Vdb::build(&v, a);
-            vdb.set_transfer_function(b);
-            let vdb_rebuilt = Vdb::build(&v, b);
-            let (one, two) = (render(&vdb, &v, b, &camera, 0.5), render(&vdb_rebuilt, &v, b, &camera, 0.5));
-            assert_eq!(
-                (bits(&one), one.samples, one.visits),
-                (bits(&two), two.samples, two.visits),
-                "vdb {from} -> {to}"
-            );
+            for (shape, build) in [("vdb", NTree::vdb as TreeBuild), ("tree64", NTree::tree64)] {
+                let mut tree = build(&v, a);
+                tree.set_transfer_function(b);
+                let rebuilt = build(&v, b);
+                let (one, two) = (render(&tree, &v, b, &camera, 0.5), render(&rebuilt, &v, b, &camera, 0.5));
+                assert_eq!(
+                    (bits(&one), one.samples, one.visits),
+                    (bits(&two), two.samples, two.visits),
+                    "{shape} {from} -> {to}"
+                );
+            }
         }
     }
 }
@@ -324,14 +335,16 @@ fn the_gpu_kernel_gives_the_cpu_image() {
         for (tf_name, tf) in transfer_functions(volume).into_iter().filter(|(n, _)| !n.starts_with("ramp 60")) {
             let bricks = Bricks::build(volume, &tf);
             let octree = MinMaxOctree::build(volume, &tf);
-            let vdb = Vdb::build(volume, &tf);
+            let vdb = NTree::vdb(volume, &tf);
+            let tree64 = NTree::tree64(volume, &tf);
             for (cam_name, camera) in cameras(volume) {
                 let dense = render(&Dense, volume, &tf, &camera, step);
                 for (name, walk, cpu) in [
                     ("dense", GpuVolume::Dense, dense.clone()),
                     ("bricks", GpuVolume::Bricks(&bricks), render(&bricks, volume, &tf, &camera, step)),
                     ("octree", GpuVolume::Octree(&octree), render(&octree, volume, &tf, &camera, step)),
-                    ("vdb", GpuVolume::Vdb(&vdb), render(&vdb, volume, &tf, &camera, step)),
+                    ("vdb", GpuVolume::Tree(&vdb), render(&vdb, volume, &tf, &camera, step)),
+                    ("tree64", GpuVolume::Tree(&tree64), render(&tree64, volume, &tf, &camera, step)),
                 ] {
                     let what = format!("{} {tf_name} {cam_name} {name}", volume.name);
                     let gpu = render_volume(ctx, volume, &walk, &tf, &camera, step, &opts).expect(&what).image;
@@ -342,7 +355,7 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                         .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
                         .fold(0.0f32, f32::max);
                     assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
-                    if name == "octree" || name == "vdb" {
+                    if name == "octree" || name == "vdb" || name == "tree64" {
                         // The trees' GPU walk cuts its own spans (a descent per span).
                         assert!(gpu.samples <= dense.samples && gpu.visits > 0, "{what}");
                     } else {

@@ -13,8 +13,8 @@ use super::rays::{FrameUniform, primary_rays};
 use super::{DispatchOptions, GpuContext, GpuError, GpuRun, run_program};
 use crate::cpu::render::Frame;
 use crate::volume::bricks::Bricks;
+use crate::volume::ntree::NTree;
 use crate::volume::octree::MinMaxOctree;
-use crate::volume::vdb::Vdb;
 use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
 
 pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.wgsl"));
@@ -24,7 +24,8 @@ pub enum GpuVolume<'a> {
     Dense,
     Bricks(&'a Bricks),
     Octree(&'a MinMaxOctree),
-    Vdb(&'a Vdb),
+    /// The N³-trees (`vdb`, `tree64`).
+    Tree(&'a NTree),
 }
 
 impl<'a> GpuVolume<'a> {
@@ -41,7 +42,9 @@ impl<'a> GpuVolume<'a> {
                 .as_octree()
                 .map(GpuVolume::Octree)
                 .ok_or_else(|| "the octree entry built no octree".to_string()),
-            "vdb" => structure.as_vdb().map(GpuVolume::Vdb).ok_or_else(|| "the vdb entry built no vdb".to_string()),
+            "vdb" | "tree64" => {
+                structure.as_ntree().map(GpuVolume::Tree).ok_or_else(|| format!("the {name} entry built no tree"))
+            }
             other => Err(format!("'{other}' has no GPU kernel")),
         }
     }
@@ -107,7 +110,7 @@ pub fn render_volume(
         GpuVolume::Dense => (0, None),
         GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
         GpuVolume::Octree(tree) => (2, Some(&tree.bricks)),
-        GpuVolume::Vdb(tree) => (2, Some(&tree.bricks)),
+        GpuVolume::Tree(tree) => (2, Some(&tree.bricks)),
     };
     header[M_MODE] = mode;
     let mut empty = Vec::new();
@@ -118,7 +121,7 @@ pub fn render_volume(
     }
     let levels: Vec<_> = match walk {
         GpuVolume::Octree(octree) => octree.levels().collect(),
-        GpuVolume::Vdb(vdb) => vdb.levels().collect(),
+        GpuVolume::Tree(tree) => tree.levels().collect(),
         GpuVolume::Dense | GpuVolume::Bricks(_) => Vec::new(),
     };
     let mut tree = Vec::new();

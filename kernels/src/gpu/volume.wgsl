@@ -2,7 +2,7 @@
 // emission–absorption compositing through a piecewise-linear transfer function, samples on the
 // global lattice t_k = k · step, trilinear reads, early termination below MIN_TRANSMITTANCE; the
 // dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1), or a tree over the
-// bricks (mode 2: the min/max octree, or the vdb tree). Every sample is the CPU's operations in
+// bricks (mode 2: the min/max octree, the vdb tree or the 64-tree). Every sample is the CPU's operations in
 // the CPU's order, so a device that rounds as the CPU does (lavapipe) gives the CPU's image. The
 // dense and brick walks hand over the CPU's very spans; the tree walk is not the CPU's recursion
 // (a GPU thread has no call stack) but a descent from the root at each span's start, so its spans
@@ -15,7 +15,7 @@
 // levels above the bricks, finest first: word 0 their count, then per level TREE_LEVEL_WORDS
 // words (its resolution, the word offsets in `tree` of its empty bits and of its full bits: no
 // empty brick below, and log2 of its nodes' width in bricks: the octree's level, the vdb's 4 and
-// 9), then the bits.
+// 9, the 64-tree's 2, 4, 6, …), then the bits.
 //
 // The answer per ray: premultiplied RGB and opacity 1 − T as four f32 words in `scratch` at
 // 4 · index; the hit's prim words carry the samples taken and the bricks visited.
@@ -232,7 +232,7 @@ fn tree_bit(offset: u32, index: u32) -> bool {
     return ((tree(offset + index / 32u) >> (index % 32u)) & 1u) != 0u;
 }
 
-// A tree over the bricks (the min/max octree, the vdb tree): from the span's start, the node the
+// A tree over the bricks (the min/max octree, the vdb tree, the 64-tree): from the span's start, the node the
 // ray is in is found by descending from the root until a node is empty (skipped to its exit),
 // full (taken to its exit) or a brick (as the brick map judges it). A start that rounds into a node the ray is leaving takes the sliver
 // up to the next lattice sample: taking is never wrong, only skipping must be safe, and the

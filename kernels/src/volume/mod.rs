@@ -18,8 +18,9 @@
 //!
 //! Structures ([`VOLUME_STRUCTURES`], what the harness's `volume` workload measures): [`dense`]
 //! (no skipping), [`bricks`] (a min/max value range per brick of voxels, emptiness re-derived from
-//! a new transfer function without a rebuild), [`octree`] (a min/max tree over the bricks) and
-//! [`vdb`] (OpenVDB's 5-4-3 tree over the bricks, walked by a hierarchical DDA).
+//! a new transfer function without a rebuild), [`octree`] (a min/max tree over the bricks), and
+//! `vdb` and `tree64` ([`ntree`]: OpenVDB's 5-4-3 tree and the 64-tree over the bricks, walked by
+//! a hierarchical DDA).
 //!
 //! **Transfer functions by occupancy.** [`Histogram`] fits a ramp to a volume so that a chosen
 //! fraction of its voxels is visible ([`Histogram::threshold_for`]): how the harness sweeps from
@@ -27,8 +28,8 @@
 
 pub mod bricks;
 pub mod dense;
+pub mod ntree;
 pub mod octree;
-pub mod vdb;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -337,8 +338,9 @@ pub trait VolumeStructure: VolumeMarch + Send {
     fn as_octree(&self) -> Option<&octree::MinMaxOctree> {
         None
     }
-    /// The structure as a VDB tree, for the GPU kernel's tree walk; `None` for any other.
-    fn as_vdb(&self) -> Option<&vdb::Vdb> {
+    /// The structure as an N³-tree (`vdb`, `tree64`), for the GPU kernel's tree walk; `None` for
+    /// any other.
+    fn as_ntree(&self) -> Option<&ntree::NTree> {
         None
     }
 }
@@ -370,7 +372,12 @@ pub const VOLUME_STRUCTURES: &[VolumeEntry] = &[
     VolumeEntry {
         name: "vdb",
         summary: "OpenVDB's 5-4-3 tree over the bricks (16³ bricks, then 32³ of those), walked by a hierarchical DDA",
-        build: |v, tf| Box::new(vdb::Vdb::build(v, tf)),
+        build: |v, tf| Box::new(ntree::NTree::vdb(v, tf)),
+    },
+    VolumeEntry {
+        name: "tree64",
+        summary: "the 64-tree over the bricks (4³ children a node, levels until one node), walked by a hierarchical DDA",
+        build: |v, tf| Box::new(ntree::NTree::tree64(v, tf)),
     },
 ];
 

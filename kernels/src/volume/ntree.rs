@@ -1,22 +1,26 @@
-//! A VDB-shaped tree for volumes (seed 003: OpenVDB's 5-4-3 tree walked by a hierarchical DDA, as
-//! NanoVDB's `HDDA` does): the brick map's 8³-voxel bricks are its leaves, 16³ of them make an
-//! internal node (128³ voxels), 32³ of those an upper node (4096³ voxels), and the upper nodes
-//! tile the domain as the root's table. Every node holds the value range of the bricks below it,
-//! so a transfer function marks it empty when that range is transparent, and *full* when no brick
-//! below it is empty; [`Vdb::set_transfer_function`] re-derives both from the stored ranges
-//! without a rebuild.
+//! N³-trees for volumes over the brick map's 8³-voxel bricks (seed 003), in two shapes
+//! ([`super::VOLUME_STRUCTURES`]):
+//! - `vdb`: OpenVDB's 5-4-3 tree walked by a hierarchical DDA, as NanoVDB's `HDDA` walks it: the
+//!   bricks are its leaves, 16³ of them make an internal node (128³ voxels), 32³ of those an upper
+//!   node (4096³ voxels), and the upper nodes tile the domain as the root's table;
+//! - `tree64`: the 64-tree (4³ children a node, the shape of the triangle side's `tree64`),
+//!   stacked until one node covers the volume.
+//!
+//! Every node holds the value range of the bricks below it, so a transfer function marks it empty
+//! when that range is transparent, and *full* when no brick below it is empty;
+//! [`NTree::set_transfer_function`] re-derives both from the stored ranges without a rebuild.
 //!
 //! A ray walks each level by a 3D-DDA over the children of the node it is in: an empty child is
-//! stepped over whole, a full one taken whole, any other descended into — one step per 128³ or
-//! 4096³ block of empty space instead of one per brick. Every face `t` comes from the bricks' one
-//! face arithmetic ([`Bricks::face`]), and spans are cut from one cursor that only moves forward,
-//! so they tile the ray's span exactly as the brick map's do; a child is found from the point at
-//! the cursor, clamped into its parent, and a rounding-sized sliver that lands in a neighbour is
-//! covered by that neighbour's range, which reaches two voxels past its faces.
+//! stepped over whole, a full one taken whole, any other descended into — one step per empty
+//! node instead of one per brick. Every face `t` comes from the bricks' one face arithmetic
+//! ([`Bricks::face`]), and spans are cut from one cursor that only moves forward, so they tile the
+//! ray's span exactly as the brick map's do; a child is found from the point at the cursor,
+//! clamped into its parent, and a rounding-sized sliver that lands in a neighbour is covered by
+//! that neighbour's range, which reaches two voxels past its faces.
 //!
 //! WGSL twin: `kernels/src/gpu/volume.wgsl`'s tree walk, shared with the octree: not this
 //! recursion of DDAs (a GPU thread has no call stack) but, at each span's start, a descent from
-//! the upper node the ray is in to the first node that settles the span (empty, full or a brick);
+//! the top node the ray is in to the first node that settles the span (empty, full or a brick);
 //! other spans, the same samples, the same image.
 
 use scenes::{Ray, Volume};
@@ -24,12 +28,12 @@ use scenes::{Ray, Volume};
 use super::bricks::Bricks;
 use super::{Compositor, TransferFunction, VolumeMarch, VolumeStructure};
 
-/// Per level above the bricks, log2 of its children per axis: 16³ bricks to an internal node,
-/// 32³ internal nodes to an upper node (OpenVDB's 4 and 5; its leaves' 3 is the bricks' 8³).
-const LOG2_CHILDREN: [u32; 2] = [4, 5];
+/// The vdb's levels above the bricks, log2 of their children per axis: 16³ bricks to an internal
+/// node, 32³ internal nodes to an upper node (OpenVDB's 4 and 5; its leaves' 3 is the bricks' 8³).
+const VDB_LOG2: [u32; 2] = [4, 5];
 
-/// Per level (0: the bricks), log2 of its nodes' width in bricks.
-const SHIFT: [u32; 3] = [0, LOG2_CHILDREN[0], LOG2_CHILDREN[0] + LOG2_CHILDREN[1]];
+/// The 64-tree's levels: 4³ children each.
+const TREE64_LOG2: u32 = 2;
 
 /// A ray as the DDAs need it.
 struct Lines {
@@ -38,9 +42,12 @@ struct Lines {
     inv: [f32; 3],
 }
 
-/// One level of nodes above the bricks: its resolution, each node's value range, and under the
+/// One level of nodes above the bricks: how many children per axis its nodes group (log2) and
+/// how many bricks wide they are (log2), its resolution, each node's value range, and under the
 /// current transfer function whether it is empty and whether it is full (x fastest).
 struct Level {
+    log2: u32,
+    shift: u32,
     res: [u32; 3],
     ranges: Vec<(f32, f32)>,
     empty: Vec<bool>,
@@ -53,11 +60,11 @@ impl Level {
     }
 }
 
-pub struct Vdb {
+pub struct NTree {
     /// The leaves.
     pub bricks: Bricks,
-    /// The internal nodes (16³ bricks) and the upper nodes (32³ internal nodes).
-    levels: [Level; 2],
+    /// The levels above the bricks, finest first.
+    levels: Vec<Level>,
 }
 
 /// The value ranges of the nodes of `log2` children per axis over a level of `res` nodes' `ranges`.
@@ -91,13 +98,30 @@ fn all_full(res: [u32; 3], full: &[bool], up: [u32; 3], log2: u32) -> Vec<bool> 
     out
 }
 
-impl Vdb {
-    pub fn build(volume: &Volume, tf: &TransferFunction) -> Self {
+impl NTree {
+    /// OpenVDB's 5-4-3 shape over `volume`'s bricks.
+    pub fn vdb(volume: &Volume, tf: &TransferFunction) -> Self {
         let bricks = Bricks::build(volume, tf);
-        let (res1, ranges1) = coarsen(bricks.res, &bricks.ranges, LOG2_CHILDREN[0]);
-        let (res2, ranges2) = coarsen(res1, &ranges1, LOG2_CHILDREN[1]);
-        let level = |res, ranges| Level { res, ranges, empty: Vec::new(), full: Vec::new() };
-        let mut tree = Self { bricks, levels: [level(res1, ranges1), level(res2, ranges2)] };
+        Self::over(bricks, tf, |level, _| VDB_LOG2.get(level).copied())
+    }
+
+    /// The 64-tree over `volume`'s bricks: levels of 4³ children until one node covers them all.
+    pub fn tree64(volume: &Volume, tf: &TransferFunction) -> Self {
+        let bricks = Bricks::build(volume, tf);
+        Self::over(bricks, tf, |_, below: [u32; 3]| below.iter().any(|&r| r > 1).then_some(TREE64_LOG2))
+    }
+
+    /// The levels above `bricks`: level `k` (0: the first above the bricks) groups `log2` children
+    /// per axis while `shape(k, the resolution below)` gives one.
+    fn over(bricks: Bricks, tf: &TransferFunction, shape: impl Fn(usize, [u32; 3]) -> Option<u32>) -> Self {
+        let mut levels: Vec<Level> = Vec::new();
+        let (mut res, mut ranges, mut shift) = (bricks.res, bricks.ranges.clone(), 0);
+        while let Some(log2) = shape(levels.len(), res) {
+            (res, ranges) = coarsen(res, &ranges, log2);
+            shift += log2;
+            levels.push(Level { log2, shift, res, ranges: ranges.clone(), empty: Vec::new(), full: Vec::new() });
+        }
+        let mut tree = Self { bricks, levels };
         tree.set_transfer_function(tf);
         tree
     }
@@ -107,9 +131,9 @@ impl Vdb {
         self.bricks.set_transfer_function(tf);
         let (mut res, mut full): ([u32; 3], Vec<bool>) =
             (self.bricks.res, self.bricks.empty.iter().map(|e| !e).collect());
-        for (level, log2) in self.levels.iter_mut().zip(LOG2_CHILDREN) {
+        for level in &mut self.levels {
             level.empty = level.ranges.iter().map(|&(lo, hi)| tf.is_empty_over(lo, hi)).collect();
-            level.full = all_full(res, &full, level.res, log2);
+            level.full = all_full(res, &full, level.res, level.log2);
             (res, full) = (level.res, level.full.clone());
         }
     }
@@ -121,17 +145,22 @@ impl Vdb {
         self.bricks.bytes() + self.levels.iter().map(|l| (l.ranges.len() * node) as u64).sum::<u64>()
     }
 
-    /// Nodes per axis of each level above the bricks: the internal nodes, then the upper nodes.
-    pub fn level_res(&self) -> [[u32; 3]; 2] {
-        [self.levels[0].res, self.levels[1].res]
+    /// Nodes per axis of each level above the bricks, finest first.
+    pub fn level_res(&self) -> Vec<[u32; 3]> {
+        self.levels.iter().map(|l| l.res).collect()
     }
 
     /// The levels above the bricks, finest first, as [`MinMaxOctree::levels`] gives its own: the
-    /// GPU kernel walks either tree by the same descent.
+    /// GPU kernel walks every tree by the same descent.
     ///
     /// [`MinMaxOctree::levels`]: super::octree::MinMaxOctree::levels
     pub fn levels(&self) -> impl Iterator<Item = ([u32; 3], &[bool], &[bool], u32)> {
-        self.levels.iter().zip(&SHIFT[1..]).map(|(l, &shift)| (l.res, l.empty.as_slice(), l.full.as_slice(), shift))
+        self.levels.iter().map(|l| (l.res, l.empty.as_slice(), l.full.as_slice(), l.shift))
+    }
+
+    /// Nodes per axis of `level` (0: the bricks).
+    fn res(&self, level: usize) -> [u32; 3] {
+        if level == 0 { self.bricks.res } else { self.levels[level - 1].res }
     }
 
     /// Node `c` of `level` (0: a brick) over the span `[*cursor, end)`: skipped when empty, taken
@@ -156,20 +185,15 @@ impl Vdb {
             *cursor = end;
             return go_on;
         }
-        let log2 = LOG2_CHILDREN[level - 1];
+        let log2 = self.levels[level - 1].log2;
         let below = self.res(level - 1);
         let lo = c.map(|x| x << log2);
         let hi: [u32; 3] = std::array::from_fn(|a| ((c[a] + 1) << log2).min(below[a]));
         self.walk(ray, level - 1, lo, hi, cursor, end, comp)
     }
 
-    /// Nodes per axis of `level` (0: the bricks).
-    fn res(&self, level: usize) -> [u32; 3] {
-        if level == 0 { self.bricks.res } else { self.levels[level - 1].res }
-    }
-
     /// The DDA over the nodes `[lo, hi)` of `level` from `*cursor` to `end`, each node entered
-    /// visited ([`Vdb::visit`]) over its span. `false` once the ray has terminated.
+    /// visited ([`NTree::visit`]) over its span. `false` once the ray has terminated.
     #[allow(clippy::too_many_arguments)] // the walk's ray, level, range, span and compositor
     fn walk(
         &self,
@@ -181,7 +205,7 @@ impl Vdb {
         end: f32,
         comp: &mut Compositor,
     ) -> bool {
-        let shift = SHIFT[level];
+        let shift = if level == 0 { 0 } else { self.levels[level - 1].shift };
         let (o, d, inv) = (&ray.origin, &ray.dir, &ray.inv);
         let mut c = [0u32; 3];
         let mut step = [0i64; 3];
@@ -220,25 +244,25 @@ impl Vdb {
     }
 }
 
-impl VolumeStructure for Vdb {
+impl VolumeStructure for NTree {
     fn set_transfer_function(&mut self, tf: &TransferFunction) {
-        Vdb::set_transfer_function(self, tf);
+        NTree::set_transfer_function(self, tf);
     }
 
     fn bytes(&self) -> u64 {
-        Vdb::bytes(self)
+        NTree::bytes(self)
     }
 
     fn occupancy(&self) -> Option<f64> {
         Some(self.bricks.occupancy())
     }
 
-    fn as_vdb(&self) -> Option<&Vdb> {
+    fn as_ntree(&self) -> Option<&NTree> {
         Some(self)
     }
 }
 
-impl VolumeMarch for Vdb {
+impl VolumeMarch for NTree {
     fn march(&self, ray: &Ray, t0: f32, t1: f32, c: &mut Compositor) {
         let lines = Lines {
             origin: ray.origin.to_array(),
@@ -246,7 +270,7 @@ impl VolumeMarch for Vdb {
             inv: crate::cpu::slab::reciprocal(ray.dir),
         };
         let mut cursor = t0;
-        let top = self.levels[1].res;
-        self.walk(&lines, 2, [0; 3], top, &mut cursor, t1, c);
+        let top = self.levels.len();
+        self.walk(&lines, top, [0; 3], self.res(top), &mut cursor, t1, c);
     }
 }
