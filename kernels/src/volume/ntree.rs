@@ -13,7 +13,7 @@
 //! A ray walks each level by a 3D-DDA over the children of the node it is in: an empty child is
 //! stepped over whole, a full one taken whole, any other descended into — one step per empty
 //! node instead of one per brick. Every face `t` comes from the bricks' one face arithmetic
-//! ([`Bricks::face`]), and spans are cut from one cursor that only moves forward, so they tile the
+//! (`Bricks::face`), and spans are cut from one cursor that only moves forward, so they tile the
 //! ray's span exactly as the brick map's do; a child is found from the point at the cursor,
 //! clamped into its parent, and a rounding-sized sliver that lands in a neighbour is covered by
 //! that neighbour's range, which reaches two voxels past its faces.
