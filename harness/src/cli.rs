@@ -109,6 +109,13 @@ pub enum Preset {
     /// the wide BVH (4-wide SIMD and scalar, 8-wide) and Embree (fast and watertight), on bunny,
     /// dragon-48k, city, terrain and the dragon at 1024×1024 on all cores.
     OrgFast,
+    /// SIMD parity (issue 30): every family's CPU kernel beside Embree on bunny, city, stadium,
+    /// terrain and the dragon at 1024×1024 on all cores — Embree (fast, watertight, 16-ray
+    /// packets), bvh, obvhs, the wide BVH (4-wide SIMD and scalar, 8-wide), ORG (SIMD, scalar,
+    /// frustum packets), the kd-tree and the triangle octree (SIMD and scalar), ESVO and SVDAG:
+    /// Mrays/s, × Embree like for like, each SIMD kernel's speed-up over its scalar form, and
+    /// the issue's targets as claims.
+    SimdParity,
     /// Seed 001 Tables 1–3 and Fig. 13 on bunny, dragon, menger, city and mandelbulb: SVO, ESVO
     /// and SVDAG nodes, pointers and storage at 512³ and 1024³, SVO → SVDAG time at 128³…2048³
     /// (seed 001's 1-bit leaves; 4³ bricks beside them at 512³…2048³), primary rays at 512²;

@@ -176,6 +176,9 @@ fn list(what: ListWhat) {
             "  org-fast   org (paper, its scalar form, copied blocks, frustum packets, and fast) beside bvh, bvh4 (SIMD, scalar and 8-wide) and embree (fast, robust and 16-ray packets) on bunny, dragon-48k, city, terrain, dragon at 1024×1024"
         );
         println!(
+            "  simd-parity every family's CPU kernel (SIMD and scalar) beside embree (fast, robust, 16-ray packets), obvhs and bvh on bunny, city, stadium, terrain, dragon at 1024×1024"
+        );
+        println!(
             "  svdag-tables seed 001 Tables 1–3, Fig. 13: svo, esvo, svdag on bunny, dragon, menger, city, mandelbulb"
         );
         println!(

@@ -67,6 +67,12 @@ pub const VOLUME_SOURCES: &[&str] = &[
     "particles@2048:192000",
 ];
 
+/// The simd-parity preset's structures (issue 30): Embree and the other triangle references, then
+/// every family whose CPU kernel tests boxes or triangles in SIMD lanes (the wide BVH, the grids'
+/// ORG, the kd-tree, the triangle octree), then the voxel octrees, whose casters are scalar.
+pub const SIMD_PARITY_STRUCTURES: &[&str] =
+    &["embree", "bvh", "obvhs", "bvh4", "org", "kdtree", "octree", "esvo", "svdag"];
+
 /// The voxel-grids preset's levels: 1024³ … 8192³.
 const VOXEL_GRID_LEVELS: std::ops::RangeInclusive<u32> = 10..=13;
 
@@ -86,6 +92,7 @@ impl Preset {
             Preset::OrgFig2 => "org-fig2",
             Preset::OrgTable1 => "org-table1",
             Preset::OrgFast => "org-fast",
+            Preset::SimdParity => "simd-parity",
             Preset::SvdagTables => "svdag-tables",
             Preset::EsvoScale => "esvo-scale",
             Preset::SvdagTemporal => "svdag-temporal",
@@ -126,12 +133,22 @@ impl Preset {
             ],
             // The wide BVH at both widths: 4-wide (SSE) and its scalar form, and 8-wide (AVX2),
             // Embree's node width on this kind of machine.
-            (Preset::OrgFast, "bvh4") => vec![
+            // Issue 30's parity table: every family with a SIMD path beside its scalar form, ORG's
+            // frustum packets beside Embree's 16-ray packets.
+            (Preset::SimdParity, "org") => vec![
+                (Vec::new(), None),
+                (vec!["simd=scalar".into()], Some("scalar".into())),
+                (vec!["org.packet=frustum".into()], Some("packets".into())),
+            ],
+            (Preset::SimdParity, "kdtree" | "octree") => {
+                vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))]
+            }
+            (Preset::OrgFast | Preset::SimdParity, "bvh4") => vec![
                 (Vec::new(), None),
                 (vec!["simd=scalar".into()], Some("scalar".into())),
                 (vec!["bvh4.width=8".into()], Some("8-wide".into())),
             ],
-            (Preset::OrgFast, "embree") => {
+            (Preset::OrgFast | Preset::SimdParity, "embree") => {
                 vec![
                     (Vec::new(), None),
                     (vec!["embree.robust=on".into()], Some("robust".into())),
@@ -212,6 +229,7 @@ impl Preset {
             Preset::OrgFig2 => vec!["rg", "org"],
             Preset::OrgTable1 => vec!["org", "ug", "rg", "rg2", "kdtree", "octree", "bvh"],
             Preset::OrgFast => vec!["bvh", "bvh4", "embree", "org"],
+            Preset::SimdParity => SIMD_PARITY_STRUCTURES.to_vec(),
             Preset::SvdagTables => vec!["svo", "esvo", "svdag"],
             Preset::EsvoScale => vec!["bvh", "esvo"],
             Preset::SvdagTemporal => vec!["bvh", "svdag", "svdag-temporal"],
@@ -238,6 +256,7 @@ impl Preset {
             Preset::SvdagTemporal => &["voxel.levels=10"],
             Preset::SvdagShadow => &[],
             Preset::OrgFast
+            | Preset::SimdParity
             | Preset::EsvoScale
             | Preset::EsvoBeam
             | Preset::VoxelGrids
@@ -273,6 +292,7 @@ impl Preset {
             Preset::OrgFig2 => vec!["dragon-11k", "dragon-48k", "dragon-203k", "dragon", "dragon@sub1"],
             Preset::SvdagTables => vec!["bunny", "dragon", "menger", "city", "mandelbulb"],
             Preset::OrgFast => vec!["bunny", "dragon-48k", "city", "terrain", "dragon"],
+            Preset::SimdParity => vec!["bunny", "city", "stadium", "terrain", "dragon"],
             Preset::EsvoScale => vec!["dragon"],
             Preset::SvdagTemporal => scenes::ANIMATED_SCENES.to_vec(),
             Preset::SvdagShadow => vec!["room", "city", "terrain"],
@@ -301,9 +321,12 @@ impl Preset {
             Preset::OrgFig1 | Preset::OrgFig2 => (512, 512),
             Preset::OrgTable1 => (500, 500),
             Preset::SvdagTables => (512, 512),
-            Preset::OrgFast | Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids | Preset::Volume => {
-                (1024, 1024)
-            }
+            Preset::OrgFast
+            | Preset::SimdParity
+            | Preset::EsvoScale
+            | Preset::EsvoBeam
+            | Preset::VoxelGrids
+            | Preset::Volume => (1024, 1024),
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
             Preset::SvdagShadow => (512, 512),

@@ -448,3 +448,54 @@ fn repetitions_adapt_unless_a_count_is_given() {
     let parts = phases["total timed"].as_f64().expect("timed") + phases["total untimed"].as_f64().expect("untimed");
     assert!(wall > 0.0 && (parts - wall).abs() < 1e-6 * wall.max(1.0), "{phases}");
 }
+
+/// The simd-parity preset (issue 30) on one small scene: every family's SIMD kernel beside its
+/// scalar form and Embree's three calls, and the report's parity table with the targets as
+/// claims. Embree's rows are there only where its library is.
+#[test]
+fn the_simd_parity_preset_pairs_every_simd_kernel_with_its_scalar_form() {
+    let out = temp_dir("simd-parity");
+    let out_arg = out.to_string_lossy().into_owned();
+    let mut args = vec!["run", "--preset", "simd-parity", "--scenes", "bunny", "--no-images", "--out", &out_arg];
+    args.extend_from_slice(TINY);
+    let o = harness(&args);
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+    let results = read_json(&out.join("results.json"));
+    let labels: Vec<String> = results["cases"]
+        .as_array()
+        .expect("cases")
+        .iter()
+        .map(|c| match c["variant"].as_str() {
+            Some(v) => format!("{} [{v}]", c["structure"].as_str().unwrap_or("?")),
+            None => c["structure"].as_str().unwrap_or("?").to_string(),
+        })
+        .collect();
+    for want in [
+        "bvh",
+        "obvhs",
+        "bvh4",
+        "bvh4 [scalar]",
+        "bvh4 [8-wide]",
+        "org",
+        "org [scalar]",
+        "org [packets]",
+        "kdtree",
+        "kdtree [scalar]",
+        "octree",
+        "octree [scalar]",
+        "esvo",
+        "svdag",
+    ] {
+        assert!(labels.iter().any(|l| l == want), "no {want} in {labels:?}");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(report.contains("## SIMD parity: every family beside Embree (issue 30)"), "{report}");
+    // Each SIMD kernel's speed-up over its scalar form is in its row (a ratio, not "—").
+    let row = report.lines().find(|l| l.starts_with("| org | ")).expect("org's row");
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    assert!(cells[6].ends_with('×'), "SIMD × scalar in {row}");
+    if structures::embree::ffi::library().is_ok() {
+        assert!(labels.iter().any(|l| l == "embree [packet16]"), "{labels:?}");
+        assert!(report.contains("bunny: ORG casts at least 0.6× Embree's rtcIntersect1"), "{report}");
+    }
+}

@@ -98,7 +98,7 @@ pub fn strongest_cell(cases: &[&Case], case: &Case, r: &RenderStats) -> String {
 }
 
 /// A case's resolved `simd` parameter (the instruction set its kernel ran, issue 30), if it has one.
-fn simd(case: &Case) -> Option<&str> {
+pub fn simd(case: &Case) -> Option<&str> {
     case.params.get("simd").and_then(|v| v.as_str())
 }
 
@@ -127,6 +127,14 @@ fn twins<'a>(cases: &'a [&'a Case], case: &'a Case, keys: &'a [&'a str]) -> impl
             && c.machine == case.machine
             && same_params_but(c, case, keys)
     })
+}
+
+/// The scalar form of a case that ran an instruction set: the case of the same structure,
+/// resolution, machine and other parameters run with `simd=scalar`; `None` for a scalar case or
+/// one without a `simd` parameter.
+pub fn scalar_twin<'a>(cases: &'a [&'a Case], case: &'a Case) -> Option<&'a Case> {
+    simd(case).filter(|&isa| isa != "scalar")?;
+    twins(cases, case, &["simd"]).find(|c| simd(c) == Some("scalar"))
 }
 
 /// Per render row that both hold, `fast`'s speed over `slow`'s as the ratio of their speeds over

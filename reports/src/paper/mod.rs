@@ -9,13 +9,15 @@
 //! [`org_scaling`] (seed 002 Fig. 1 and Fig. 2), [`org_table1`] (Table 1), [`svdag_tables`] (seed
 //! 001 Tables 1–3, Fig. 13), [`svdag_shadow`] (Table 4), [`svdag_temporal`] (Tables 5–6), [`esvo`]
 //! (seed 000 §5.6 and §6.2, ESVO at scale), [`voxel_grids`] (grid or octree on the same voxels),
-//! [`volumes`] (seed 003's volumes: empty space skipped per structure);
+//! [`volumes`] (seed 003's volumes: empty space skipped per structure), [`simd_parity`] (issue 30:
+//! every family beside Embree, SIMD and scalar);
 //! `grid_builds` is what the grid reproductions share.
 
 pub mod esvo;
 mod grid_builds;
 pub mod org_scaling;
 pub mod org_table1;
+pub mod simd_parity;
 pub mod svdag_shadow;
 pub mod svdag_tables;
 pub mod svdag_temporal;
@@ -40,6 +42,7 @@ pub fn section(results: &Results) -> Sheet {
         "org-table1" => table1(results),
         "svdag-tables" => svdag_tables::section(results),
         "esvo-scale" => esvo_scale(results),
+        "simd-parity" => simd_parity::section(results),
         _ => Sheet::default(),
     };
     // Tables 4–6 wherever a run has shadow or temporal SVDAG cases, the beam wherever ESVO ran
