@@ -29,6 +29,7 @@
 pub mod cpu;
 pub mod gpu;
 pub mod registry;
+pub mod simt;
 pub mod stats;
 pub mod volume;
 
@@ -39,7 +40,7 @@ pub use registry::{
     Accel, QUERY_STRUCTURES, QueryEntry, STRUCTURES, StructureEntry, build_structure, find_query_structure,
     find_structure, param_keys, structure_check, structure_family, structure_names,
 };
-pub use stats::{Counters, LEVEL_STEPS, MAX_STEPS, NoStats, Stats};
+pub use stats::{Counters, LEVEL_STEPS, MAX_STEPS, NoStats, Stats, StepKind};
 
 /// The nearest intersection found along a ray (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,6 +59,11 @@ pub trait Traverse: Send + Sync {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit>;
     /// The same traversal, adding its steps, visits, primitive tests, pushes and pops to `counters`.
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit>;
+    /// The same traversal recording the ray's iterations, branches and buffer reads into `trace`
+    /// for the warp simulator ([`simt`], issue 45); `None` where the kernel records no trace.
+    fn intersect_traced(&self, _ray: &Ray, _t_min: f32, _t_max: f32, _trace: &mut simt::Trace) -> Option<Option<Hit>> {
+        None
+    }
     /// Whether anything lies on the ray in `(t_min, t_max)` (shadow and AO rays).
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.intersect(ray, t_min, t_max).is_some()

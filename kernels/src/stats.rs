@@ -37,6 +37,41 @@ pub trait Stats {
     fn level_step(&mut self, level: usize);
     /// Adds counts gathered elsewhere (a per-frame pre-pass).
     fn add(&mut self, counters: &Counters);
+    /// The branch of the loop body the current step takes ([`StepKind`]), called once per
+    /// step after the reads every step makes: what the warp simulator (`crate::simt`) serialises
+    /// lanes by. Only a trace records it.
+    #[inline(always)]
+    fn step_kind(&mut self, _kind: StepKind) {}
+    /// A read of `bytes` bytes at byte `offset` of the structure's GPU buffer number `buffer` (its
+    /// index in the structure's `GpuProgram::buffers`), as the WGSL twin makes it: what the warp
+    /// simulator turns into memory transactions. Only a trace records it.
+    #[inline(always)]
+    fn read(&mut self, _buffer: u32, _offset: u64, _bytes: u32) {}
+}
+
+/// The branch of a traversal loop's body a step takes, as the WGSL twin's loop branches: lanes of
+/// one warp in different kinds run one after the other (`crate::simt`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum StepKind {
+    /// An inner node: its children's boxes tested, the nearer descended into.
+    Inner,
+    /// A leaf or an occupied cell: its primitives tested.
+    Leaf,
+    /// One primitive test of a leaf's loop over its primitives: kernels say [`Stats::prim_test`],
+    /// and the simulator runs a leaf's tests in lock-step as their own steps.
+    Test,
+}
+
+impl StepKind {
+    pub const ALL: [StepKind; 3] = [StepKind::Inner, StepKind::Leaf, StepKind::Test];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StepKind::Inner => "inner",
+            StepKind::Leaf => "leaf",
+            StepKind::Test => "test",
+        }
+    }
 }
 
 /// Counts nothing; the timed path.

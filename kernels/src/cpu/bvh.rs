@@ -7,7 +7,7 @@ use structures::bvh::{Bvh, BvhNode, MAX_DEPTH};
 use super::slab;
 use super::triangle::{ShearedRay, nearest_hit};
 use crate::gpu::GpuProgram;
-use crate::{Counters, Hit, NoStats, Stats, Traverse};
+use crate::{Counters, Hit, NoStats, Stats, StepKind, Traverse};
 
 /// Boxes entered up to this factor beyond the best hit so far are still opened. A triangle hit
 /// at a grazing angle has an ill-conditioned `t` that may round below its own box's entry
@@ -34,11 +34,19 @@ impl SlabRay {
     }
 }
 
+/// The GPU buffers `bvh.wgsl` reads (`gpu::bvh::program`'s order) and their record sizes, for the
+/// reads a trace records (`crate::simt`).
+const NODES: u32 = 0;
+const REFS: u32 = 1;
+const TRIANGLES: u32 = 2;
+const NODE_BYTES: u32 = size_of::<BvhNode>() as u32;
+const TRIANGLE_BYTES: u32 = size_of::<scenes::Triangle>() as u32;
+
 /// The loop needs no iteration counter (`crate::MAX_STEPS`): the layout stores an interior node's
 /// children after it (`structures::bvh`, checked by `Bvh::validate`), so each descent moves
 /// to a higher index, each push is popped once, and the loop ends within twice the node count.
 /// The reference BVH is every timing's denominator, so it pays for no guard it cannot need.
-fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+fn trace_ray<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     let slab = SlabRay::new(ray);
     let sheared = ShearedRay::new(ray);
     let mut best_t = t_max;
@@ -47,16 +55,21 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
     let mut stack = [(0u32, 0f32); MAX_DEPTH];
     let mut sp = 0usize;
     let mut node = 0usize;
+    stats.read(NODES, 0, NODE_BYTES);
     slab.entry(&bvh.nodes[0], t_min, best_t)?;
     'traverse: loop {
         stats.step();
         stats.visit();
+        stats.read(NODES, node as u64 * u64::from(NODE_BYTES), NODE_BYTES);
         let n = &bvh.nodes[node];
         if n.is_leaf() {
+            stats.step_kind(StepKind::Leaf);
             // The tie rule: an equal `t` from a smaller triangle index wins too, so the hit is
             // brute force's whatever order the leaves are visited in (`tie_limit`).
-            for &r in &bvh.refs[n.first as usize..(n.first + n.count) as usize] {
+            for (k, &r) in (n.first..).zip(&bvh.refs[n.first as usize..(n.first + n.count) as usize]) {
                 stats.prim_test();
+                stats.read(REFS, u64::from(k) * 4, 4);
+                stats.read(TRIANGLES, u64::from(r) * u64::from(TRIANGLE_BYTES), TRIANGLE_BYTES);
                 if let Some(t) = sheared.intersect(&bvh.triangles[r as usize], t_min, tie_limit(best_t, best_prim))
                     && (t < best_t || r < best_prim)
                 {
@@ -66,7 +79,9 @@ fn trace<S: Stats>(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
                 }
             }
         } else {
+            stats.step_kind(StepKind::Inner);
             let left = n.first as usize;
+            stats.read(NODES, left as u64 * u64::from(NODE_BYTES), 2 * NODE_BYTES);
             let tl = slab.entry(&bvh.nodes[left], t_min, cull_t);
             let tr = slab.entry(&bvh.nodes[left + 1], t_min, cull_t);
             match (tl, tr) {
@@ -132,11 +147,21 @@ pub(crate) fn pop_nearer<S: Stats>(
 
 impl Traverse for Bvh {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        trace_ray(self, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        trace_ray(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        trace: &mut crate::simt::Trace,
+    ) -> Option<Option<Hit>> {
+        Some(trace_ray(self, ray, t_min, t_max, trace))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
