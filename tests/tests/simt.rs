@@ -56,10 +56,30 @@ fn check(scene_name: &str) {
         assert_eq!(sim.tally.rays, rays.len() as u64);
         let efficiency = sim.tally.efficiency().expect("steps");
         assert!(efficiency > 0.0 && efficiency <= 1.0, "{name} on {scene_name}: efficiency {efficiency}");
-        // A bigger L2 never reads more from memory than a smaller one (LRU is a stack algorithm).
-        assert!(sim.dram_bytes.windows(2).all(|w| w[1].1 <= w[0].1), "{:?}", sim.dram_bytes);
+        // Memory reads are L2 misses: at most one per sector requested.
         assert!(sim.dram_bytes.iter().all(|&(_, b)| b <= sim.tally.sectors * simt::SECTOR));
     }
 }
 
 per_builtin_scene!(check);
+
+/// The figures are deterministic: the same on one thread as on several.
+#[test]
+fn the_simulation_does_not_depend_on_the_thread_count() {
+    let scene = scenes::load_scene("bunny").expect("scene");
+    let params = Params::default();
+    let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
+    let accel = kernels::build_structure("bvh", &input).expect("registered").expect("built");
+    let camera = scenes::Camera::new(scene.camera_spec(), 96, 96);
+    let rays: Vec<scenes::Ray> = (0..96 * 96).map(|i| camera.ray(i % 96, i / 96)).collect();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut hits = Vec::new();
+            simt::simulate(accel.as_ref(), &rays, &simt::L2_SIZES, 8, &mut hits).expect("traced")
+        })
+    };
+    let one = run(1);
+    assert_eq!(one, run(3));
+    assert!(one.dram_bytes.iter().all(|&(_, b)| b > 0), "a cold cache reads something: {:?}", one.dram_bytes);
+}

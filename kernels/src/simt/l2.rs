@@ -1,93 +1,65 @@
-//! The shared L2 cache of the warp simulator: fully associative, least recently used, over 32-byte
-//! sectors (the unit a GPU's L2 fills from memory). Real L2s are set-associative and hashed; a fully
-//! associative LRU of the same size is the model's simplification, the same on every machine.
+//! The shared L2 cache of the warp simulator: set-associative with least-recently-used
+//! replacement in each set, over 32-byte sectors (the unit a GPU's L2 fills from memory). A
+//! sector's set is picked by a multiplicative hash of its address, as GPUs hash addresses over
+//! their L2 slices so that strided reads spread. The real hash functions are unpublished; this
+//! one is the model's, the same on every machine.
 
-use std::collections::HashMap;
+/// Ways per set: 16, as in NVIDIA's L2s.
+pub const WAYS: usize = 16;
 
-/// No entry (the list's end).
-const NIL: u32 = u32::MAX;
+/// No sector (an empty way).
+const EMPTY: u64 = u64::MAX;
 
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    sector: u64,
-    prev: u32,
-    next: u32,
-}
-
-/// An LRU set of sectors: a hash map into a doubly linked list, most recent first.
+/// An LRU cache of sectors in sets of [`WAYS`] ways, each set most recent first.
 #[derive(Debug)]
 pub struct Lru {
-    capacity: usize,
-    map: HashMap<u64, u32, foldhash::fast::FixedState>,
-    entries: Vec<Entry>,
-    head: u32,
-    tail: u32,
+    ways: usize,
+    sets: u64,
+    tags: Vec<u64>,
     pub accesses: u64,
     pub misses: u64,
 }
 
 impl Lru {
-    /// A cache of `capacity` sectors (at least one).
+    /// A cache of `capacity` sectors (at least one) in sets of [`WAYS`] ways (one set of
+    /// `capacity` ways when it holds fewer).
     pub fn new(capacity: usize) -> Self {
+        Self::with_ways(capacity, WAYS)
+    }
+
+    /// A cache of `capacity` sectors in sets of `ways` ways; `ways = capacity` is fully
+    /// associative.
+    pub fn with_ways(capacity: usize, ways: usize) -> Self {
         let capacity = capacity.max(1);
-        Self {
-            capacity,
-            map: HashMap::with_capacity_and_hasher(capacity.min(1 << 20), foldhash::fast::FixedState::with_seed(0)),
-            entries: Vec::with_capacity(capacity.min(1 << 20)),
-            head: NIL,
-            tail: NIL,
-            accesses: 0,
-            misses: 0,
-        }
+        let ways = ways.clamp(1, capacity);
+        let sets = (capacity / ways) as u64;
+        Self { ways, sets, tags: vec![EMPTY; sets as usize * ways], accesses: 0, misses: 0 }
     }
 
-    fn unlink(&mut self, i: u32) {
-        let Entry { prev, next, .. } = self.entries[i as usize];
-        match prev {
-            NIL => self.head = next,
-            p => self.entries[p as usize].next = next,
-        }
-        match next {
-            NIL => self.tail = prev,
-            n => self.entries[n as usize].prev = prev,
-        }
+    /// The set sector `sector` maps to.
+    pub fn set_of(&self, sector: u64) -> u64 {
+        // Fibonacci hashing: the high bits of the product, spread over the sets.
+        (u128::from(sector.wrapping_mul(0x9E37_79B9_7F4A_7C15)) * u128::from(self.sets) >> 64) as u64
     }
 
-    fn push_front(&mut self, i: u32) {
-        self.entries[i as usize].prev = NIL;
-        self.entries[i as usize].next = self.head;
-        if self.head != NIL {
-            self.entries[self.head as usize].prev = i;
-        }
-        self.head = i;
-        if self.tail == NIL {
-            self.tail = i;
-        }
-    }
-
-    /// Reads `sector`; whether it was cached. A miss evicts the least recently used sector when
-    /// the cache is full.
+    /// Reads `sector`; whether it was cached. A miss evicts its set's least recently used
+    /// sector when the set is full.
     pub fn access(&mut self, sector: u64) -> bool {
         self.accesses += 1;
-        if let Some(&i) = self.map.get(&sector) {
-            self.unlink(i);
-            self.push_front(i);
-            return true;
+        let start = self.set_of(sector) as usize * self.ways;
+        let set = &mut self.tags[start..start + self.ways];
+        match set.iter().position(|&t| t == sector) {
+            Some(p) => {
+                set[..=p].rotate_right(1);
+                true
+            }
+            None => {
+                self.misses += 1;
+                set.rotate_right(1);
+                set[0] = sector;
+                false
+            }
         }
-        self.misses += 1;
-        let i = if self.entries.len() < self.capacity {
-            self.entries.push(Entry { sector, prev: NIL, next: NIL });
-            (self.entries.len() - 1) as u32
-        } else {
-            let victim = self.tail;
-            self.unlink(victim);
-            self.map.remove(&self.entries[victim as usize].sector);
-            self.entries[victim as usize].sector = sector;
-            victim
-        };
-        self.map.insert(sector, i);
-        self.push_front(i);
-        false
     }
 }
 
@@ -96,11 +68,11 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
-    /// The obvious LRU: a list, most recent first.
-    fn brute_force(capacity: usize, stream: &[u64]) -> u64 {
+    /// The obvious LRU: a list, most recent first; its misses over `stream`.
+    fn brute_force(capacity: usize, stream: impl Iterator<Item = u64>) -> u64 {
         let mut list: Vec<u64> = Vec::new();
         let mut misses = 0;
-        for &s in stream {
+        for s in stream {
             if let Some(p) = list.iter().position(|&x| x == s) {
                 list.remove(p);
             } else {
@@ -115,28 +87,44 @@ mod tests {
     }
 
     #[test]
-    fn misses_equal_a_brute_force_lru_on_random_streams() {
+    fn fully_associative_misses_equal_a_brute_force_lru_on_random_streams() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(45);
         for (capacity, span) in [(1, 4), (3, 8), (16, 40), (64, 70), (100, 1000)] {
             let stream: Vec<u64> = (0..5000).map(|_| rng.random_range(0..span)).collect();
-            let mut lru = Lru::new(capacity);
+            let mut lru = Lru::with_ways(capacity, capacity);
             for &s in &stream {
                 lru.access(s);
             }
-            assert_eq!(lru.misses, brute_force(capacity, &stream), "capacity {capacity}, span {span}");
+            assert_eq!(lru.misses, brute_force(capacity, stream.iter().copied()), "capacity {capacity}, span {span}");
             assert_eq!(lru.accesses, 5000);
         }
     }
 
     #[test]
+    fn each_set_is_a_brute_force_lru_of_its_own_sectors() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(46);
+        let stream: Vec<u64> = (0..20000).map(|_| rng.random_range(0..4000)).collect();
+        let mut lru = Lru::new(64 * WAYS);
+        for &s in &stream {
+            lru.access(s);
+        }
+        let expected: u64 =
+            (0..64).map(|set| brute_force(WAYS, stream.iter().copied().filter(|&s| lru.set_of(s) == set))).sum();
+        assert_eq!(lru.misses, expected);
+        // The hash spreads consecutive sectors over every set.
+        let used: std::collections::HashSet<u64> = (0..4000).map(|s| lru.set_of(s)).collect();
+        assert_eq!(used.len(), 64);
+    }
+
+    #[test]
     fn a_cycle_one_longer_than_the_cache_always_misses() {
-        let mut lru = Lru::new(4);
+        let mut lru = Lru::with_ways(4, 4);
         for round in 0..3 {
             for s in 0..5 {
                 assert!(!lru.access(s), "round {round}, sector {s}");
             }
         }
-        let mut lru = Lru::new(5);
+        let mut lru = Lru::with_ways(5, 5);
         (0..5).for_each(|s| _ = lru.access(s));
         assert!((0..5).all(|s| lru.access(s)), "a cycle that fits hits after its first round");
     }

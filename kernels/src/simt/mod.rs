@@ -4,7 +4,7 @@
 //! took and every read of the structure's buffers; [`warp`] runs 32 consecutive rays of the
 //! dispatch in lock-step as SIMT hardware does (SIMT efficiency, coalesced sectors and lines);
 //! [`l2`] feeds the warps' transactions, a few warps in flight at a time, through a shared LRU
-//! cache to count the bytes that reach memory. Everything is deterministic: the same figures on
+//! cache (set-associative, LRU) to count the bytes that reach memory. Everything is deterministic: the same figures on
 //! every machine.
 
 pub mod l2;
@@ -12,6 +12,7 @@ pub mod trace;
 pub mod warp;
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use scenes::Ray;
 
@@ -26,7 +27,7 @@ use crate::{Hit, Traverse};
 pub struct L2Model {
     pub lru: l2::Lru,
     in_flight: usize,
-    active: VecDeque<(WarpSteps, usize)>,
+    active: VecDeque<(Arc<WarpSteps>, usize)>,
 }
 
 impl L2Model {
@@ -36,7 +37,7 @@ impl L2Model {
     }
 
     /// The next warp of the dispatch.
-    pub fn push(&mut self, warp: WarpSteps) {
+    pub fn push(&mut self, warp: Arc<WarpSteps>) {
         while self.active.len() >= self.in_flight {
             self.round();
         }
@@ -81,9 +82,14 @@ pub struct Simulated {
     pub dram_bytes: Vec<(u64, u64)>,
 }
 
+/// Warps traced at a time (in parallel), before their memory instructions go through the L2s in
+/// dispatch order: bounds the memory a simulation holds.
+const BLOCK_WARPS: usize = 256;
+
 /// Traces `rays` (in dispatch order: a warp is 32 consecutive rays) through `accel` and runs the
 /// warps through the models; `None` where the kernel records no trace. `hits` receives each
-/// ray's hit (the traced kernel's, for checking against the plain one).
+/// ray's hit (the traced kernel's, for checking against the plain one). Warps are traced in
+/// parallel; the figures do not depend on the thread count.
 pub fn simulate(
     accel: &(impl Traverse + ?Sized),
     rays: &[Ray],
@@ -91,23 +97,39 @@ pub fn simulate(
     in_flight: usize,
     hits: &mut Vec<Option<Hit>>,
 ) -> Option<Simulated> {
-    let mut lanes: Vec<Trace> = vec![Trace::default(); WARP];
+    use rayon::prelude::*;
     let mut tally = Tally::default();
     let mut models: Vec<L2Model> = l2_sizes.iter().map(|&b| L2Model::new(b, in_flight)).collect();
     hits.clear();
-    for warp in rays.chunks(WARP) {
-        for (lane, ray) in lanes.iter_mut().zip(warp) {
-            lane.clear();
-            hits.push(accel.intersect_traced(ray, 0.0, f32::INFINITY, lane)?);
+    for block in rays.chunks(WARP * BLOCK_WARPS) {
+        let warps: Vec<(Tally, WarpSteps, Vec<Option<Hit>>)> = block
+            .par_chunks(WARP)
+            .map_init(
+                || vec![Trace::default(); WARP],
+                |lanes, warp| {
+                    let mut found = Vec::with_capacity(warp.len());
+                    for (lane, ray) in lanes.iter_mut().zip(warp) {
+                        lane.clear();
+                        found.push(accel.intersect_traced(ray, 0.0, f32::INFINITY, lane)?);
+                    }
+                    let mut tally = Tally::default();
+                    let mut steps = WarpSteps::default();
+                    run_warp(&lanes[..warp.len()], &mut tally, &mut steps);
+                    Some((tally, steps, found))
+                },
+            )
+            .collect::<Option<_>>()?;
+        let mut streams: Vec<Arc<WarpSteps>> = Vec::with_capacity(warps.len());
+        for (t, steps, found) in warps {
+            tally.add(&t);
+            hits.extend_from_slice(&found);
+            streams.push(Arc::new(steps));
         }
-        let mut steps = WarpSteps::default();
-        run_warp(&lanes[..warp.len()], &mut tally, &mut steps);
-        if let Some((last, rest)) = models.split_last_mut() {
-            for m in rest {
-                m.push(steps.clone());
+        models.par_iter_mut().for_each(|m| {
+            for steps in &streams {
+                m.push(Arc::clone(steps));
             }
-            last.push(steps);
-        }
+        });
     }
     let dram_bytes = l2_sizes.iter().zip(&mut models).map(|(&b, m)| (b, m.finish())).collect();
     Some(Simulated { tally, dram_bytes })
@@ -131,13 +153,13 @@ mod tests {
         // Two warps reading the same sector 0 then sector 1: resident together, the second
         // warp's reads hit what the first brought in even in a one-sector cache...
         let mut m = L2Model::new(SECTOR, 2);
-        m.push(warp(&[&[0], &[1]]));
-        m.push(warp(&[&[0], &[1]]));
+        m.push(Arc::new(warp(&[&[0], &[1]])));
+        m.push(Arc::new(warp(&[&[0], &[1]])));
         assert_eq!(m.finish(), 2 * SECTOR);
         // ...one after the other they do not: sector 1 evicted sector 0.
         let mut m = L2Model::new(SECTOR, 1);
-        m.push(warp(&[&[0], &[1]]));
-        m.push(warp(&[&[0], &[1]]));
+        m.push(Arc::new(warp(&[&[0], &[1]])));
+        m.push(Arc::new(warp(&[&[0], &[1]])));
         assert_eq!(m.finish(), 4 * SECTOR);
     }
 }
