@@ -39,7 +39,7 @@ impl Lru {
     /// The set sector `sector` maps to.
     pub fn set_of(&self, sector: u64) -> u64 {
         // Fibonacci hashing: the high bits of the product, spread over the sets.
-        (u128::from(sector.wrapping_mul(0x9E37_79B9_7F4A_7C15)) * u128::from(self.sets) >> 64) as u64
+        ((u128::from(sector.wrapping_mul(0x9E37_79B9_7F4A_7C15)) * u128::from(self.sets)) >> 64) as u64
     }
 
     /// Reads `sector`; whether it was cached. A miss evicts its set's least recently used
