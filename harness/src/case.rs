@@ -376,8 +376,47 @@ pub(crate) fn timed_renders(
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         gpu: None,
         uncounted: uncounted(accel.counted()),
+        simt: match workload {
+            Workload::Primary => phases::time(Phase::Simulation, || simulate(accel, camera)),
+            _ => None,
+        },
     };
     (stats, frame, heat)
+}
+
+/// The warp simulator over `camera`'s primary rays in the dispatch's tile-major order, where
+/// the structure's kernel records traces (issue 45).
+fn simulate(accel: &dyn Accel, camera: &Camera) -> Option<reports::SimtStats> {
+    use kernels::simt;
+    let (w, h) = (camera.width, camera.height);
+    let rays: Vec<scenes::Ray> = (0..Frame::sample_count(w, h))
+        .map(|i| Frame::pixel_of(w, i))
+        .filter(|&(x, y)| x < w && y < h)
+        .map(|(x, y)| camera.ray(x, y))
+        .collect();
+    let t = Instant::now();
+    let sim = simt::simulate(accel, &rays, &simt::L2_SIZES, simt::IN_FLIGHT, &mut Vec::new())?;
+    let tally = &sim.tally;
+    let rays = tally.rays.max(1) as f64;
+    Some(reports::SimtStats {
+        efficiency: tally.efficiency().unwrap_or(0.0),
+        efficiency_by_kind: kernels::StepKind::ALL
+            .iter()
+            .filter_map(|&k| Some((k.name().to_string(), tally.efficiency_of(k)?)))
+            .collect(),
+        warp_steps_per_ray: tally.warp_steps_per_ray(),
+        lane_steps_per_ray: tally.lane_steps.iter().sum::<u64>() as f64 / rays,
+        sectors_per_ray: tally.sectors_per_ray(),
+        lines_per_ray: tally.lines as f64 / rays,
+        bytes_requested_per_ray: tally.bytes_requested as f64 / rays,
+        dram: sim
+            .dram_bytes
+            .iter()
+            .map(|&(l2_bytes, bytes)| reports::DramTraffic { l2_bytes, bytes_per_ray: bytes as f64 / rays })
+            .collect(),
+        warps_in_flight: simt::IN_FLIGHT as u64,
+        ms: ms_since(t),
+    })
 }
 
 /// Empty steps per ray by level, up to the deepest level stepped (empty where no level was).

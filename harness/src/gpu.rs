@@ -95,5 +95,6 @@ pub fn measure(
             bindings: run.bindings as u64,
             prepass: (!run.prepass_ms.is_empty()).then(|| Timing::from_samples(&run.prepass_ms)),
         }),
+        simt: None,
     })))
 }

@@ -23,6 +23,8 @@ pub enum Phase {
     UntimedRenders,
     /// The counting pass after the timed renders (steps, visits, tests, the heat map).
     Counting,
+    /// The warp simulator's pass over the primary rays (`kernels::simt`).
+    Simulation,
     /// Hits checked against the reference (or brute force), the reference's frame included.
     Agreement,
     /// Case images: encoding and writing them.
@@ -42,6 +44,7 @@ impl Phase {
             Phase::UntimedBuilds => "untimed builds",
             Phase::UntimedRenders => "warm-up renders",
             Phase::Counting => "counting passes",
+            Phase::Simulation => "simulated GPU",
             Phase::Agreement => "agreement checks",
             Phase::Images => "images",
             Phase::Reports => "results and reports",

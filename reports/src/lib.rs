@@ -15,5 +15,6 @@ pub mod plots;
 pub mod references;
 pub mod scaling;
 pub mod schema;
+pub mod simt;
 
 pub use schema::*;

@@ -239,6 +239,7 @@ fn scene_section(out: &mut String, cases: &[&Case]) {
     if !notes.is_empty() {
         let _ = writeln!(out);
     }
+    out.push_str(&crate::simt::scene_table(cases));
     let images: Vec<&String> = cases.iter().flat_map(|c| &c.images).collect();
     if !images.is_empty() {
         for img in images {

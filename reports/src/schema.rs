@@ -662,6 +662,41 @@ pub struct RenderStats {
     /// counts less than ours; absent when everything was counted.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub uncounted: Vec<String>,
+    /// CPU primary rows of a structure whose kernel records traces: what a GPU would do with its
+    /// steps, simulated (`kernels::simt`, issue 45). Deterministic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simt: Option<SimtStats>,
+}
+
+/// The warp simulator's figures for one render's rays (`kernels::simt`): 32 consecutive rays of
+/// the dispatch's tile-major order to a warp, run in lock-step as the WGSL kernel's loop runs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SimtStats {
+    /// Active lane-steps ÷ (32 × issued warp-steps), over every kind of step.
+    pub efficiency: f64,
+    /// The same per kind of step (`inner`, `leaf`, `test`), where the kernel takes it.
+    pub efficiency_by_kind: BTreeMap<String, f64>,
+    /// Issued warp-steps per ray in lane units (lane-steps per ray ÷ efficiency).
+    pub warp_steps_per_ray: f64,
+    /// Steps per ray the lanes take: loop iterations and primitive tests.
+    pub lane_steps_per_ray: f64,
+    /// Distinct 32-byte sectors and 128-byte lines per memory instruction, per ray.
+    pub sectors_per_ray: f64,
+    pub lines_per_ray: f64,
+    /// Bytes the active lanes read, per ray.
+    pub bytes_requested_per_ray: f64,
+    /// Per modelled L2 size, the bytes per ray read from memory.
+    pub dram: Vec<DramTraffic>,
+    /// Warps resident at a time in the L2 model.
+    pub warps_in_flight: u64,
+    /// What the simulation took (not a timing of the structure).
+    pub ms: f64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DramTraffic {
+    pub l2_bytes: u64,
+    pub bytes_per_ray: f64,
 }
 
 impl RenderStats {

@@ -281,3 +281,31 @@ fn volume_cases_are_gated_on_their_counts_and_their_ratio_to_the_dense_marcher()
     assert_eq!(failing(&cmp), ["particles@128:100 octree, visible 100 %  —"]);
     assert!(run(&base, &fewer).rows.iter().any(|r| r.status == Status::New));
 }
+
+/// The warp simulator's figures (issue 45) are gated where the baseline has them: more sectors
+/// or DRAM bytes per ray fail, and so does a run that lost them.
+#[test]
+fn simulated_gpu_figures_are_gated() {
+    let mut base = fixture();
+    case_mut(&mut base, "dragon-48k", "rg").render[0].simt = Some(reports::SimtStats {
+        efficiency: 0.5,
+        warp_steps_per_ray: 20.0,
+        sectors_per_ray: 10.0,
+        dram: vec![reports::DramTraffic { l2_bytes: 4 << 20, bytes_per_ray: 40.0 }],
+        ..reports::SimtStats::default()
+    });
+    assert!(!run(&base, &base).failed(), "{}", run(&base, &base).table(true));
+    let mut new = base.clone();
+    let simt = case_mut(&mut new, "dragon-48k", "rg").render[0].simt.as_mut().expect("set");
+    simt.sectors_per_ray = 11.0;
+    simt.dram[0].bytes_per_ray = 48.0;
+    assert_eq!(
+        failing(&run(&new, &base)),
+        ["dragon-48k rg cpu/primary sectors_per_ray", "dragon-48k rg cpu/primary dram_bytes_per_ray[4 MiB L2]"]
+    );
+    let mut lost = base.clone();
+    case_mut(&mut lost, "dragon-48k", "rg").render[0].simt = None;
+    assert!(run(&lost, &base).failed(), "{}", run(&lost, &base).table(true));
+    // A run that gained them over an older baseline is not judged on them.
+    assert!(!run(&base, &fixture()).failed());
+}

@@ -358,6 +358,32 @@ fn compare_case(
             det("hit_mismatches", na.hit_mismatches as f64, ba.hit_mismatches as f64);
             det("prim_mismatches", na.prim_mismatches as f64, ba.prim_mismatches as f64);
         }
+        // The warp simulator's figures (issue 45), where the baseline has them: a kernel whose
+        // warps issue more steps or read more sectors has changed what a GPU would do.
+        if let Some(bs) = &br.simt {
+            match &nr.simt {
+                Some(ns) => {
+                    let mut figures = vec![
+                        (
+                            "warp_steps_per_ray",
+                            "warp_steps_per_ray".to_string(),
+                            ns.warp_steps_per_ray,
+                            bs.warp_steps_per_ray,
+                        ),
+                        ("sectors_per_ray", "sectors_per_ray".to_string(), ns.sectors_per_ray, bs.sectors_per_ray),
+                    ];
+                    for b in &bs.dram {
+                        let n = ns.dram.iter().find(|n| n.l2_bytes == b.l2_bytes).map_or(0.0, |n| n.bytes_per_ray);
+                        let shown = format!("dram_bytes_per_ray[{} MiB L2]", b.l2_bytes >> 20);
+                        figures.push(("dram_bytes_per_ray", shown, n, b.bytes_per_ray));
+                    }
+                    for (metric, shown, nv, bv) in figures {
+                        rows.push(deterministic_row(&who, name.clone(), metric, shown, nv, bv, th));
+                    }
+                }
+                None => rows.push(presence_row(&who, &name, Status::Missing, "simulated GPU figures not in NEW")),
+            }
+        }
         let side = |c: &Case, r: &RenderStats, run: &Results| {
             let reference = reference_case(run, c)
                 .and_then(|rc| rc.render.iter().find(|x| x.backend == r.backend && x.workload == r.workload))

@@ -30,6 +30,10 @@ pub(super) const METRICS: &[(&str, Kind, f64)] = &[
     ("hit_mismatches", Kind::Count, 0.0),
     ("prim_mismatches", Kind::Count, 0.0),
     ("rays_at_bound", Kind::Count, 0.0),
+    // The warp simulator's figures (issue 45): deterministic, so any rise is a change.
+    ("warp_steps_per_ray", Kind::Count, 1e-6),
+    ("sectors_per_ray", Kind::Count, 1e-6),
+    ("dram_bytes_per_ray", Kind::Count, 1e-6),
     // Volume cases (the volume workload): the shares of voxels and bricks a transfer function
     // leaves visible, samples per ray, and pixels that differ from the dense marcher's image.
     ("occupancy", Kind::Exact, 1e-9),

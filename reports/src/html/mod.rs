@@ -463,6 +463,7 @@ fn scene_section(out: &mut String, cases: &[&Case], images: &Shots, prefix: &str
         esc(&first.scene_provenance)
     );
     summary_table(out, cases);
+    out.push_str(&markdown_fragment(&crate::simt::scene_table(cases)));
     scene_charts(out, &first.scene, cases);
     scene_images(out, cases, images);
     let _ = writeln!(out, "</section>");
