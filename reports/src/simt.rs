@@ -8,7 +8,7 @@ use crate::schema::{Case, SimtStats};
 
 /// The scene's table in Markdown; empty where no case was simulated.
 pub fn scene_table(cases: &[&Case]) -> String {
-    let rows: Vec<(&Case, &crate::RenderStats, &crate::SimtStats)> =
+    let rows: Vec<(&Case, &crate::RenderStats, &SimtStats)> =
         cases.iter().flat_map(|c| c.render.iter().filter_map(move |r| Some((*c, r, r.simt.as_ref()?)))).collect();
     let Some((_, _, first)) = rows.first() else { return String::new() };
     let sizes: Vec<u64> = first.dram.iter().map(|d| d.l2_bytes).collect();
