@@ -54,7 +54,7 @@ use super::stack::Stack;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, LaneKernel, PacketKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
-use crate::{Counters, Hit, NoStats, Stats, Traverse};
+use crate::{Counters, Hit, NoStats, Stats, StepKind, Traverse};
 
 mod packet;
 
@@ -322,6 +322,33 @@ fn cell_is_empty(grid: &Grid, h: &GridHeader, index: u32) -> bool {
     grid.cells[cell] == grid.cells[cell + 1]
 }
 
+/// The GPU buffers `grid.wgsl` reads (`gpu::grid::program`'s order) and their record sizes, for
+/// the reads a trace records (`crate::simt`).
+const HEADERS: u32 = 0;
+const CELLS: u32 = 1;
+const REFS: u32 = 2;
+const BRICKS: u32 = 3;
+const TRIANGLES: u32 = 4;
+const HEADER_BYTES: u64 = size_of::<GridHeader>() as u64;
+const TRIANGLE_BYTES: u64 = size_of::<scenes::Triangle>() as u64;
+
+/// What `grid.wgsl`'s loop body reads first for the unit (`shift`, `index`) of a level, and the branch it takes: a
+/// brick's occupancy word (an inner step), or a cell's two offsets (a leaf step). Nothing unless
+/// `stats` traces.
+#[inline(always)]
+fn trace_unit<S: Stats>(h: &GridHeader, shift: u32, index: u32, stats: &mut S) {
+    if !S::COUNTING {
+        return;
+    }
+    if shift != 0 {
+        stats.step_kind(StepKind::Inner);
+        stats.read(BRICKS, u64::from(h.first_brick + index / 32) * 4, 4);
+    } else {
+        stats.step_kind(StepKind::Leaf);
+        stats.read(CELLS, u64::from(h.first_cell + index) * 4, 8);
+    }
+}
+
 /// Counts one more step against [`crate::MAX_STEPS`]; past it, records the bound and says so.
 #[inline(always)]
 fn over_bound<S: Stats>(guard: &mut u32, stats: &mut S) -> bool {
@@ -348,6 +375,7 @@ fn walk<T: TriangleLanes, S: Stats>(
     }
     let top = grid.headers.first()?;
     let dda = DdaRay::new(ray);
+    stats.read(HEADERS, 0, HEADER_BYTES as u32);
     let t_enter = dda.clip(top, t_min, t_max)?;
     let mut best_t = t_max;
     let mut cull_t = cull_bound(t_max);
@@ -362,6 +390,7 @@ fn walk<T: TriangleLanes, S: Stats>(
             return None;
         }
         stats.step();
+        trace_unit(h, cur.shift, cur.index, stats);
         if cur.shift != 0 {
             // A brick: step over it when empty, else run the DDA of its cells over its span.
             if occupied(grid, h, cur.index) {
@@ -373,6 +402,9 @@ fn walk<T: TriangleLanes, S: Stats>(
             stats.visit();
             let cell = (h.first_cell + cur.index) as usize;
             let refs = &grid.refs[grid.cells[cell] as usize..grid.cells[cell + 1] as usize];
+            if S::COUNTING && refs.len() == 1 {
+                stats.read(REFS, u64::from(grid.cells[cell]) * 4, 4);
+            }
             if let &[link] = refs
                 && link & SUBGRID_BIT != 0
             {
@@ -382,13 +414,16 @@ fn walk<T: TriangleLanes, S: Stats>(
                 }
                 stats.push();
                 let sub = link & !SUBGRID_BIT;
+                stats.read(HEADERS, u64::from(sub) * HEADER_BYTES, HEADER_BYTES as u32);
                 h = &grid.headers[sub as usize];
                 cur = dda.enter(grid, sub, cur.t_in);
                 continue 'traverse;
             }
             if S::COUNTING {
-                for _ in refs {
+                for (k, &prim) in (grid.cells[cell]..).zip(refs) {
                     stats.prim_test();
+                    stats.read(REFS, u64::from(k) * 4, 4);
+                    stats.read(TRIANGLES, u64::from(prim) * TRIANGLE_BYTES, TRIANGLE_BYTES as u32);
                 }
             }
             let found = match grid.layout {
@@ -423,6 +458,7 @@ fn walk<T: TriangleLanes, S: Stats>(
                 return None;
             }
             stats.step();
+            trace_unit(h, cur.shift, cur.index, stats);
             if is_cell {
                 stats.visit();
             }
@@ -436,6 +472,7 @@ fn walk<T: TriangleLanes, S: Stats>(
             cur = below;
             if leaving_grid {
                 stats.pop();
+                stats.read(HEADERS, u64::from(cur.header) * HEADER_BYTES, HEADER_BYTES as u32);
                 h = &grid.headers[cur.header as usize];
             }
             let crossing = cur.crossing();
@@ -482,6 +519,16 @@ impl Traverse for Grid {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         triangle4::run_on(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        trace: &mut crate::simt::Trace,
+    ) -> Option<Option<Hit>> {
+        Some(triangle4::run_on(self, ray, t_min, t_max, trace))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
