@@ -60,16 +60,23 @@ pub enum StepKind {
     /// One primitive test of a leaf's loop over its primitives: kernels say [`Stats::prim_test`],
     /// and the simulator runs a leaf's tests in lock-step as their own steps.
     Test,
+    /// An octree caster's PUSH: into the occupied child the ray is in.
+    Descend,
+    /// An octree caster's ADVANCE (and POP): on to the next cube of the same scale.
+    Advance,
 }
 
 impl StepKind {
-    pub const ALL: [StepKind; 3] = [StepKind::Inner, StepKind::Leaf, StepKind::Test];
+    pub const ALL: [StepKind; 5] =
+        [StepKind::Inner, StepKind::Leaf, StepKind::Test, StepKind::Descend, StepKind::Advance];
 
     pub fn name(self) -> &'static str {
         match self {
             StepKind::Inner => "inner",
             StepKind::Leaf => "leaf",
             StepKind::Test => "test",
+            StepKind::Descend => "descend",
+            StepKind::Advance => "advance",
         }
     }
 }

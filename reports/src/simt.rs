@@ -6,6 +6,9 @@ use std::fmt::Write;
 
 use crate::schema::{Case, SimtStats};
 
+/// Step kinds in the order the table lists their efficiencies (`kernels::StepKind`'s names).
+const KINDS: [&str; 5] = ["inner", "leaf", "test", "descend", "advance"];
+
 /// The scene's table in Markdown; empty where no case was simulated.
 pub fn scene_table(cases: &[&Case]) -> String {
     let rows: Vec<(&Case, &crate::RenderStats, &SimtStats)> =
@@ -17,7 +20,8 @@ pub fn scene_table(cases: &[&Case]) -> String {
         out,
         "GPU behaviour (simulated, not measured on a GPU): the primary rays' traces run 32 to a warp in the \
          dispatch's order, in lock-step as the WGSL loop runs; efficiency is active lanes over issued lanes \
-         (inner nodes · leaves · primitive tests); lane-steps are a ray's loop iterations and primitive tests, \
+         (overall, and per kind of step: inner nodes or bricks, leaves or cells, primitive tests, an octree's \
+         descents and advances); lane-steps are a ray's loop iterations and primitive tests, \
          warp-steps the issues its warp spends on it in lane units (lane-steps ÷ efficiency); sectors are \
          the distinct 32-byte sectors per memory instruction; DRAM bytes come from a 16-way LRU L2 of each \
          size with {} warps in flight.\n",
@@ -26,14 +30,12 @@ pub fn scene_table(cases: &[&Case]) -> String {
     let l2: String = sizes.iter().map(|b| format!(" DRAM B/ray, {} MiB L2 |", b >> 20)).collect();
     let _ = writeln!(
         out,
-        "| structure | workload | SIMT efficiency | inner · leaf · test | warp-steps/ray | lane-steps/ray | sectors/ray | bytes read/ray |{l2}"
+        "| structure | workload | SIMT efficiency | by kind of step | warp-steps/ray | lane-steps/ray | sectors/ray | bytes read/ray |{l2}"
     );
     let _ = writeln!(out, "|---|---|---:|---|---:|---:|---:|---:|{}", "---:|".repeat(sizes.len()));
     for (case, r, s) in rows {
-        let kinds: Vec<String> = ["inner", "leaf", "test"]
-            .iter()
-            .map(|k| s.efficiency_by_kind.get(*k).map_or("—".into(), |e| format!("{e:.2}")))
-            .collect();
+        let kinds: Vec<String> =
+            KINDS.iter().filter_map(|k| Some(format!("{k} {:.2}", s.efficiency_by_kind.get(*k)?))).collect();
         let dram: String = sizes
             .iter()
             .map(|b| {
@@ -98,7 +100,7 @@ mod tests {
         let md = scene_table(&[&bvh, &embree]);
         assert!(md.contains("DRAM B/ray, 4 MiB L2 | DRAM B/ray, 50 MiB L2 |"), "{md}");
         assert!(
-            md.contains("| bvh | primary | 0.50 | 0.75 · 0.25 · — | 30.0 | 15.0 | 12.5 | 900 | 20.0 | 2.5 |"),
+            md.contains("| bvh | primary | 0.50 | inner 0.75 · leaf 0.25 | 30.0 | 15.0 | 12.5 | 900 | 20.0 | 2.5 |"),
             "{md}"
         );
         assert!(!md.contains("| embree"), "a render without a trace has no row: {md}");

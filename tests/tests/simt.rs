@@ -8,7 +8,7 @@ use structures::{BuildInput, Params};
 use tests::{per_builtin_scene, ray_set};
 
 /// The structures whose kernels record traces.
-const TRACED: &[&str] = &["bvh", "ug", "rg", "rg2", "org"];
+const TRACED: &[&str] = &["bvh", "ug", "rg", "rg2", "org", "svo", "esvo"];
 
 fn check(scene_name: &str) {
     let scene = scenes::load_scene(scene_name).expect("scene");

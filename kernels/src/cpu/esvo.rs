@@ -39,6 +39,25 @@ impl CastNodes for Descriptors<'_> {
         let w = node as usize * 2;
         [self.words[w], self.words[w + 1]]
     }
+    /// `esvo.wgsl` reads a descriptor's two words from buffer 1, `words` (`gpu::voxel::esvo`).
+    #[inline(always)]
+    fn trace_fetch<S: Stats>(&self, node: u32, _scale: u32, stats: &mut S) {
+        stats.read(1, u64::from(node) * 8, 8);
+    }
+    /// A far pointer: the first word of the slot it lies in.
+    #[inline(always)]
+    fn trace_child<S: Stats>(&self, node: u32, d: &[u32; 2], _slot: u32, _scale: u32, stats: &mut S) {
+        if is_far(d[0]) {
+            stats.read(1, u64::from(node.wrapping_add(child_ptr(d[0]))) * 8, 4);
+        }
+    }
+    /// The contour word the contour pointer and the child's rank lead to.
+    #[inline(always)]
+    fn trace_contour<S: Stats>(&self, node: u32, d: &[u32; 2], slot: u32, stats: &mut S) {
+        let mask = contour_mask(d[1]);
+        let word = u64::from(node) * 2 + u64::from(contour_ptr(d[1]) + rank(mask, slot));
+        stats.read(1, word * 4, 4);
+    }
     #[inline(always)]
     fn valid(&self, d: &[u32; 2], slot: u32) -> bool {
         valid_mask(d[0]) >> slot & 1 == 1
@@ -305,6 +324,18 @@ impl Traverse for Esvo {
             None => beam_starts(self, camera, &mut NoStats),
             Some(c) => beam_starts(self, camera, c),
         })
+    }
+
+    /// From `t_min`, without LOD or the beam's start distances (the simulated GPU casts the plain
+    /// rays).
+    fn intersect_traced(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        trace_to: &mut crate::simt::Trace,
+    ) -> Option<Option<Hit>> {
+        Some(trace(self, ray, t_min, t_max, 0.0, trace_to))
     }
 
     fn gpu_program(&self, camera: &Camera) -> Option<GpuProgram<'_>> {

@@ -20,7 +20,7 @@
 use glam::{BVec3A, Vec3, Vec3A};
 
 use super::octree_ray::{OctreeRay, S_MAX, span_is_empty};
-use crate::Stats;
+use crate::{Stats, StepKind};
 
 /// What the caster needs from a node layout. Slots passed in are *world* child slots (bit set =
 /// upper half, x in bit 0); the caster mirrors them.
@@ -41,6 +41,16 @@ pub trait CastNodes {
     fn leaf(&self, desc: &Self::Desc, slot: u32, scale: u32) -> bool;
     /// The node of non-leaf child `slot` (a voxel at `scale`).
     fn child(&self, node: Self::Node, desc: &Self::Desc, slot: u32, scale: u32) -> Self::Node;
+    /// The reads of the WGSL twin's `node_fetch(node, scale)`, for a trace (`crate::simt`);
+    /// none where the layout does not say.
+    #[inline(always)]
+    fn trace_fetch<S: Stats>(&self, _node: Self::Node, _scale: u32, _stats: &mut S) {}
+    /// The reads of `node_child` beyond the descriptor (a far pointer, a DAG's child word).
+    #[inline(always)]
+    fn trace_child<S: Stats>(&self, _node: Self::Node, _desc: &Self::Desc, _slot: u32, _scale: u32, _stats: &mut S) {}
+    /// The reads of `node_contour` for a child that has a contour.
+    #[inline(always)]
+    fn trace_contour<S: Stats>(&self, _node: Self::Node, _desc: &Self::Desc, _slot: u32, _stats: &mut S) {}
     /// The contour of child `slot`, if the layout has one for it.
     #[inline(always)]
     fn contour(&self, _node: Self::Node, _desc: &Self::Desc, _slot: u32) -> Option<u32> {
@@ -122,6 +132,7 @@ pub fn cast<L: CastNodes, S: Stats>(
             Some(d) => d,
             None => {
                 stats.visit();
+                nodes.trace_fetch(parent, scale, stats);
                 let d = nodes.fetch(parent, scale);
                 desc = Some(d);
                 d
@@ -145,6 +156,7 @@ pub fn cast<L: CastNodes, S: Stats>(
                 && let (Some(span_of), Some(contour)) = (contour_span, nodes.contour(parent, &d, slot))
             {
                 stats.prim_test();
+                nodes.trace_contour(parent, &d, slot, stats);
                 let (cube_min, size) = world_cube(pos, scale_exp2, r.mirror_mask);
                 let (lo, hi) = span_of(contour, cube_min, size, ray);
                 t_min = above(t_min, lo);
@@ -152,6 +164,7 @@ pub fn cast<L: CastNodes, S: Stats>(
             }
             if t_min <= tv_max {
                 if nodes.leaf(&d, slot, scale) {
+                    stats.step_kind(StepKind::Leaf);
                     return Some(CastHit::at(t_min, parent, slot, pos.into(), scale, r.mirror_mask));
                 }
                 // PUSH. The paper writes the entry only when `tc_max < h`: otherwise this child is
@@ -160,11 +173,13 @@ pub fn cast<L: CastNodes, S: Stats>(
                 // anyway and spares the loop a branch that mispredicts on about one push in two
                 // (callgrind's branch simulation, city 256²: 2.7 of ESVO's 14.4 mispredicts per
                 // ray). The count stays the paper's push.
+                stats.step_kind(StepKind::Descend);
                 stack[scale as usize] = (parent, t_max);
                 if S::COUNTING && tc_max < h {
                     stats.push();
                 }
                 h = tc_max;
+                nodes.trace_child(parent, &d, slot, scale, stats);
                 parent = nodes.child(parent, &d, slot, scale);
                 desc = None;
                 scale -= 1;
@@ -176,6 +191,7 @@ pub fn cast<L: CastNodes, S: Stats>(
         }
 
         // ADVANCE: step to the next cube of the same scale through the exit plane(s).
+        stats.step_kind(StepKind::Advance);
         let step_mask = advance(&mut pos, corner, tc_max, scale_exp2);
         t_min = tc_max;
         idx ^= step_mask;

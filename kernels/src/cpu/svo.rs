@@ -31,6 +31,11 @@ impl CastNodes for SvoNodes<'_> {
     fn fetch(&self, node: u32, _scale: u32) -> [u32; 2] {
         self.nodes[node as usize]
     }
+    /// `svo.wgsl` reads a node's two words from buffer 1 (`gpu::voxel::svo`).
+    #[inline(always)]
+    fn trace_fetch<S: Stats>(&self, node: u32, _scale: u32, stats: &mut S) {
+        stats.read(1, u64::from(node) * 8, 8);
+    }
     #[inline(always)]
     fn valid(&self, desc: &[u32; 2], slot: u32) -> bool {
         desc[0] >> slot & 1 == 1
@@ -51,7 +56,7 @@ pub(crate) fn leaf_hit<N>(h: &CastHit<N>, normal_code: u32) -> Hit {
     Hit { t: h.t, normal: decode_normal(normal_code), prim: morton::encode(h.coords) }
 }
 
-fn trace<S: Stats>(svo: &Svo, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
+fn cast_ray<S: Stats>(svo: &Svo, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if svo.is_empty() {
         return None;
     }
@@ -66,11 +71,21 @@ fn trace<S: Stats>(svo: &Svo, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) 
 
 impl Traverse for Svo {
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, &mut NoStats)
+        cast_ray(self, ray, t_min, t_max, &mut NoStats)
     }
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
-        trace(self, ray, t_min, t_max, counters)
+        cast_ray(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        trace: &mut crate::simt::Trace,
+    ) -> Option<Option<Hit>> {
+        Some(cast_ray(self, ray, t_min, t_max, trace))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
