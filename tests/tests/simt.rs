@@ -7,18 +7,28 @@ use kernels::simt::{self, Trace};
 use structures::{BuildInput, Params};
 use tests::{per_builtin_scene, ray_set};
 
-/// The structures whose kernels record traces.
-const TRACED: &[&str] = &["bvh", "ug", "rg", "rg2", "org", "svo", "esvo"];
+/// The structures whose kernels record traces, with the parameters of each layout they trace.
+const TRACED: &[(&str, &[&str])] = &[
+    ("bvh", &[]),
+    ("ug", &[]),
+    ("rg", &[]),
+    ("rg2", &[]),
+    ("org", &[]),
+    ("svo", &["voxel.levels=8"]),
+    ("esvo", &["voxel.levels=8"]),
+    ("svdag", &["voxel.levels=8", "svdag.leaves=bits"]),
+    ("svdag", &["voxel.levels=8", "svdag.leaves=bricks"]),
+];
 
 fn check(scene_name: &str) {
     let scene = scenes::load_scene(scene_name).expect("scene");
     let triangles = scene.triangles();
-    let params = Params::default();
-    let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
     let mut rays: Vec<scenes::Ray> = ray_set(&scene, &triangles, 600, 45).into_iter().map(|r| r.ray).collect();
     let camera = scenes::Camera::new(scene.camera_spec(), 24, 24);
     rays.extend((0..24).flat_map(|y| (0..24).map(move |x| (x, y))).map(|(x, y)| camera.ray(x, y)));
-    for &name in TRACED {
+    for &(name, settings) in TRACED {
+        let params = Params::parse(settings.iter().copied()).expect("parameters");
+        let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
         let accel = kernels::build_structure(name, &input).expect("registered").expect("built");
         let camera = scenes::Camera::new(scene.camera_spec(), 8, 8);
         let buffers: Vec<u64> = accel

@@ -52,6 +52,25 @@ impl CastNodes for DagNodes<'_> {
         }
         [self.words[node as usize] & CHILD_MASK, node]
     }
+    /// `svdag.wgsl` reads from buffer 1, `words` (`gpu::voxel::svdag`): a node's first word (its
+    /// child mask), or a brick's two mask words, or nothing for a brick's child (the node is the mask).
+    #[inline(always)]
+    fn trace_fetch<S: Stats>(&self, node: u32, scale: u32, stats: &mut S) {
+        match (self.bricks, scale) {
+            (true, s) if s == self.leaf_scale => {}
+            (true, s) if s == self.leaf_scale + 1 => stats.read(1, u64::from(node) * 4, 8),
+            _ => stats.read(1, u64::from(node) * 4, 4),
+        }
+    }
+    /// The child pointer word, or the brick word holding the child's byte.
+    #[inline(always)]
+    fn trace_child<S: Stats>(&self, node: u32, d: &[u32; 2], slot: u32, scale: u32, stats: &mut S) {
+        let word = match self.bricks && scale == self.leaf_scale + 1 {
+            true => node + (slot >> 2),
+            false => pointer_index(node, d[0], slot),
+        };
+        stats.read(1, u64::from(word) * 4, 4);
+    }
     #[inline(always)]
     fn valid(&self, d: &[u32; 2], slot: u32) -> bool {
         d[0] >> slot & 1 == 1
@@ -96,6 +115,10 @@ impl Traverse for Svdag {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, self.root, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut crate::simt::Trace) -> Option<Option<Hit>> {
+        Some(trace(self, self.root, ray, t_min, t_max, to))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
