@@ -10,7 +10,6 @@
 
 use std::time::Instant;
 
-use kernels::cpu::render::Frame;
 use kernels::simt;
 use rayon::prelude::*;
 use scenes::Camera;
@@ -27,11 +26,7 @@ fn main() -> anyhow::Result<()> {
     let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
     let accel = kernels::registry::build_structure(structure, &input)
         .ok_or_else(|| anyhow::anyhow!("no structure '{structure}'"))??;
-    let rays: Vec<scenes::Ray> = (0..Frame::sample_count(size, size))
-        .map(|i| Frame::pixel_of(size, i))
-        .filter(|&(x, y)| x < size && y < size)
-        .map(|(x, y)| camera.ray(x, y))
-        .collect();
+    let rays = simt::dispatch_rays(&camera);
     let start = Instant::now();
     let plain: Vec<_> = rays.par_iter().map(|r| accel.intersect(r, 0.0, f32::INFINITY)).collect();
     let render_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -388,12 +388,7 @@ pub(crate) fn timed_renders(
 /// the structure's kernel records traces (issue 45).
 fn simulate(accel: &dyn Accel, camera: &Camera) -> Option<reports::SimtStats> {
     use kernels::simt;
-    let (w, h) = (camera.width, camera.height);
-    let rays: Vec<scenes::Ray> = (0..Frame::sample_count(w, h))
-        .map(|i| Frame::pixel_of(w, i))
-        .filter(|&(x, y)| x < w && y < h)
-        .map(|(x, y)| camera.ray(x, y))
-        .collect();
+    let rays = simt::dispatch_rays(camera);
     let t = Instant::now();
     let sim = simt::simulate(accel, &rays, &simt::L2_SIZES, simt::IN_FLIGHT, &mut Vec::new())?;
     let tally = &sim.tally;

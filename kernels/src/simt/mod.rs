@@ -82,6 +82,18 @@ pub struct Simulated {
     pub dram_bytes: Vec<(u64, u64)>,
 }
 
+/// The primary rays of `camera` in the GPU dispatch's order (the renderer's tile-major order,
+/// `cpu::render::Frame::pixel_of`; no padding): what [`simulate`] groups 32 to a warp.
+pub fn dispatch_rays(camera: &scenes::Camera) -> Vec<Ray> {
+    use crate::cpu::render::Frame;
+    let (w, h) = (camera.width, camera.height);
+    (0..Frame::sample_count(w, h))
+        .map(|i| Frame::pixel_of(w, i))
+        .filter(|&(x, y)| x < w && y < h)
+        .map(|(x, y)| camera.ray(x, y))
+        .collect()
+}
+
 /// Warps traced at a time (in parallel), before their memory instructions go through the L2s in
 /// dispatch order: bounds the memory a simulation holds.
 const BLOCK_WARPS: usize = 256;

@@ -37,6 +37,10 @@ enum Phase {
 }
 
 /// A ray's trace; [`Trace::clear`] readies it for the next ray without freeing its memory.
+///
+/// A read goes to the part of the current iteration last opened: before its branch, its body, or
+/// its last primitive test. So a read a kernel makes after a leaf's tests in the same iteration
+/// (the grid's parent header on a POP that leaves a sub-grid) counts with the last test's.
 #[derive(Clone, Debug, Default)]
 pub struct Trace {
     /// The kernel's own counters for the ray, counted as by [`Counters`].
