@@ -18,6 +18,11 @@ const TRACED: &[(&str, &[&str])] = &[
     ("esvo", &["voxel.levels=8"]),
     ("svdag", &["voxel.levels=8", "svdag.leaves=bits"]),
     ("svdag", &["voxel.levels=8", "svdag.leaves=bricks"]),
+    ("tree64", &["voxel.levels=8"]),
+    ("tree64", &["voxel.levels=8", "tree64.dag=on"]),
+    ("brickmap", &["voxel.levels=8"]),
+    ("vdb", &["voxel.levels=8", "vdb.tables=dense", "vdb.skip=child"]),
+    ("vdb", &["voxel.levels=8", "vdb.tables=compact", "vdb.skip=block", "vdb.log2=3,2,2"]),
 ];
 
 fn check(scene_name: &str) {
@@ -52,6 +57,7 @@ fn check(scene_name: &str) {
             let tests: u64 = trace.iterations().iter().map(|it| u64::from(it.tests.end - it.tests.start)).sum();
             assert_eq!(tests, counted.prim_tests, "{name} on {scene_name}, ray {i}: primitive tests");
             assert!(trace.iterations().iter().all(|it| it.kind.is_some()), "{name}: every step names its branch");
+            assert!(counted.steps == 0 || !trace.all_reads().is_empty(), "{name} on {scene_name}, ray {i}: no reads");
             for r in trace.all_reads() {
                 let size = buffers.get(r.buffer as usize).copied();
                 assert!(

@@ -6,8 +6,9 @@
 use scenes::{Camera, Ray};
 use structures::brickmap::{BRICK_WORDS, Brickmap};
 
-use super::wide_dda::{WideNodes, trace};
+use super::wide_dda::{WideNodes, WideReads, trace, trace_recorded};
 use crate::gpu::GpuProgram;
+use crate::simt::Trace;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// A node is a brick's first word.
@@ -38,6 +39,17 @@ impl WideNodes for Nodes<'_> {
     }
 }
 
+/// `brickmap.wgsl` reads a top cell's entry from its buffer 1, `top`, and the word of a voxel's
+/// bit from buffer 2, `bricks`.
+impl WideReads for Nodes<'_> {
+    fn top_reads(&self, cell: [u32; 3], to: &mut Trace) {
+        to.read(1, self.map.top_index(cell) as u64 * 4, 4);
+    }
+    fn occupied_reads(&self, brick: &u32, _level: usize, v: u32, to: &mut Trace) {
+        to.read(2, u64::from(*brick + (v >> 5)) * 4, 4);
+    }
+}
+
 fn trace_map<S: Stats>(map: &Brickmap, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if map.is_empty() {
         return None;
@@ -52,6 +64,14 @@ impl Traverse for Brickmap {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace_map(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut Trace) -> Option<Option<Hit>> {
+        if self.is_empty() {
+            return Some(None);
+        }
+        let nodes = Nodes { map: self };
+        Some(trace_recorded(&nodes, &self.levels, &self.grid, &self.occupied, ray, t_min, t_max, to))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

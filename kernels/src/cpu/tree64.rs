@@ -8,8 +8,9 @@ use scenes::{Camera, Ray};
 use structures::tree64::Tree64;
 use structures::tree64::layout::{BRICK_WORDS, DESCRIPTOR_WORDS, PTR, child_index, mask};
 
-use super::wide_dda::{WideNodes, trace};
+use super::wide_dda::{WideNodes, WideReads, trace, trace_recorded};
 use crate::gpu::GpuProgram;
+use crate::simt::Trace;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The 64-tree's words as the DDA sees them: a node is a word index (of a descriptor in `words`,
@@ -55,6 +56,23 @@ impl WideNodes for Nodes<'_> {
     }
 }
 
+/// `tree64.wgsl` reads a descriptor's three words from its buffer 1, `words`, or a brick's two
+/// from buffer 2, `bricks`, when it fetches a node; its other accessors work on those in registers.
+impl WideReads for Nodes<'_> {
+    fn fetch_reads(&self, node: u32, level: usize, to: &mut Trace) {
+        match level == self.voxels {
+            true => to.read(2, u64::from(node) * 4, BRICK_WORDS as u32 * 4),
+            false => to.read(1, u64::from(node) * 4, DESCRIPTOR_WORDS as u32 * 4),
+        }
+    }
+}
+
+impl<'a> Nodes<'a> {
+    fn new(t: &'a Tree64) -> Self {
+        Self { words: &t.words, bricks: &t.bricks, voxels: t.levels.len - 1 }
+    }
+}
+
 fn trace_tree<S: Stats>(t: &Tree64, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if t.is_empty() {
         return None;
@@ -70,6 +88,13 @@ impl Traverse for Tree64 {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace_tree(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut Trace) -> Option<Option<Hit>> {
+        if self.is_empty() {
+            return Some(None);
+        }
+        Some(trace_recorded(&Nodes::new(self), &self.levels, &self.grid, &self.occupied, ray, t_min, t_max, to))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

@@ -10,8 +10,9 @@ use structures::vdb::layout::{LevelOffsets, Sizes, bit, compact_child_index};
 use structures::vdb::{Skip, Tables, Vdb};
 use structures::voxel::morton;
 
-use super::wide_dda::{WideNodes, trace};
+use super::wide_dda::{WideNodes, WideReads, trace, trace_recorded};
 use crate::gpu::GpuProgram;
+use crate::simt::Trace;
 use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The tree's words as the DDA sees them. A node is a word index (in `leaves` at the voxels'
@@ -28,6 +29,51 @@ impl<'a, const DENSE: bool, const BLOCKS: bool> Nodes<'a, DENSE, BLOCKS> {
     fn new(v: &'a Vdb) -> Self {
         let (words, leaves, sizes) = (&v.words[..], &v.leaves[..], v.params.sizes());
         Self { words, leaves, sizes, voxels: v.levels.len - 1, at: &v.offsets }
+    }
+
+    /// The buffer holding the masks of `level`'s cells (`vdb.wgsl`'s 1, `words`, or at the voxels'
+    /// level 2, `leaves`) and its words.
+    #[inline(always)]
+    fn masks(&self, level: usize) -> (u32, &[u32]) {
+        match level == self.voxels {
+            true => (2, self.leaves),
+            false => (1, self.words),
+        }
+    }
+
+    /// [`WideNodes::empty_block`], telling `read` each run of mask words it reads (first word of
+    /// [`Self::masks`], count), in order.
+    #[inline(always)]
+    fn empty_block_reading(
+        &self,
+        node: u32,
+        level: usize,
+        slot: u32,
+        max: u32,
+        mut read: impl FnMut(usize, usize),
+    ) -> u32 {
+        if !BLOCKS || max == 0 {
+            return 0;
+        }
+        let at = (node + self.at.mask_at[level]) as usize;
+        let mask = &self.masks(level).1[at..];
+        read(at + (slot >> 5) as usize, 1);
+        if mask[(slot >> 5) as usize] >> (slot & 24) & 0xff != 0 {
+            return 0;
+        }
+        let mut j = 1;
+        while j < max.min(3) {
+            // The next block up: 8^(j+1) bits from a multiple of them, whole words from 64 bits on.
+            let bits = 1u32 << (3 * (j + 1));
+            let first = ((slot & !(bits - 1)) >> 5) as usize;
+            let n = (bits as usize).div_ceil(32);
+            read(at + first, n);
+            if mask[first..first + n].iter().any(|&w| w != 0) {
+                break;
+            }
+            j += 1;
+        }
+        j
     }
 }
 
@@ -52,25 +98,7 @@ impl<const DENSE: bool, const BLOCKS: bool> WideNodes for Nodes<'_, DENSE, BLOCK
     /// 8, 64 or 512 consecutive mask bits) around the empty slot.
     #[inline(always)]
     fn empty_block(&self, node: &u32, level: usize, slot: u32, max: u32) -> u32 {
-        if !BLOCKS {
-            return 0;
-        }
-        let words = if level == self.voxels { self.leaves } else { self.words };
-        let mask = &words[(*node + self.at.mask_at[level]) as usize..];
-        if max == 0 || mask[(slot >> 5) as usize] >> (slot & 24) & 0xff != 0 {
-            return 0;
-        }
-        let mut j = 1;
-        while j < max.min(3) {
-            // The next block up: 8^(j+1) bits from a multiple of them, whole words from 64 bits on.
-            let bits = 1u32 << (3 * (j + 1));
-            let first = ((slot & !(bits - 1)) >> 5) as usize;
-            if mask[first..first + (bits as usize).div_ceil(32)].iter().any(|&w| w != 0) {
-                break;
-            }
-            j += 1;
-        }
-        j
+        self.empty_block_reading(*node, level, slot, max, |_, _| {})
     }
     #[inline(always)]
     fn child(&self, node: u32, _desc: &u32, level: usize, slot: u32) -> u32 {
@@ -84,25 +112,68 @@ impl<const DENSE: bool, const BLOCKS: bool> WideNodes for Nodes<'_, DENSE, BLOCK
     }
 }
 
+/// What `vdb.wgsl` reads: the root table's words in the top cell's binary search, a mask word for
+/// a cell's bit, the child's table entry (dense) or its mask and rank words and the list's offset
+/// (compact), and the mask words an empty block's test reads; buffer 1 is `words`, 2 `leaves`.
+impl<const DENSE: bool, const BLOCKS: bool> WideReads for Nodes<'_, DENSE, BLOCKS> {
+    fn top_reads(&self, cell: [u32; 3], to: &mut Trace) {
+        self.sizes.find_tile_reading(self.words, morton::encode(cell), |at, n| to.read(1, at as u64 * 4, n as u32 * 4));
+    }
+    fn occupied_reads(&self, node: &u32, level: usize, slot: u32, to: &mut Trace) {
+        let (buffer, _) = self.masks(level);
+        to.read(buffer, u64::from(*node + self.at.mask_at[level] + (slot >> 5)) * 4, 4);
+    }
+    fn child_reads(&self, node: u32, _desc: &u32, level: usize, slot: u32, to: &mut Trace) {
+        let word = |to: &mut Trace, i: u32| to.read(1, u64::from(i) * 4, 4);
+        if DENSE {
+            word(to, node + self.at.table_at[level] + 2 * slot);
+        } else {
+            let (g, within) = (slot >> 6, slot & 63);
+            let mask = node + self.at.mask_at[level];
+            word(to, mask + 2 * g);
+            word(to, node + self.at.table_at[level] + g);
+            if within >= 32 {
+                word(to, mask + 2 * g + 1);
+            }
+            word(to, node);
+        }
+    }
+    fn empty_block_reads(&self, node: &u32, level: usize, slot: u32, max: u32, to: &mut Trace) {
+        let (buffer, _) = self.masks(level);
+        self.empty_block_reading(*node, level, slot, max, |at, n| to.read(buffer, at as u64 * 4, n as u32 * 4));
+    }
+}
+
+/// `$body` with `$nodes` bound to the accessor of `$v`'s table and skip modes, each mode its own
+/// monomorphised loop.
+macro_rules! with_nodes {
+    ($v:expr, |$nodes:ident| $body:expr) => {
+        match ($v.params.tables, $v.params.skip) {
+            (Tables::Dense, Skip::Child) => {
+                let $nodes = Nodes::<true, false>::new($v);
+                $body
+            }
+            (Tables::Dense, Skip::Block) => {
+                let $nodes = Nodes::<true, true>::new($v);
+                $body
+            }
+            (Tables::Compact, Skip::Child) => {
+                let $nodes = Nodes::<false, false>::new($v);
+                $body
+            }
+            (Tables::Compact, Skip::Block) => {
+                let $nodes = Nodes::<false, true>::new($v);
+                $body
+            }
+        }
+    };
+}
+
 fn trace_vdb<S: Stats>(v: &Vdb, ray: &Ray, t_min: f32, t_max: f32, stats: &mut S) -> Option<Hit> {
     if v.is_empty() {
         return None;
     }
-    let (levels, grid, occupied) = (&v.levels, &v.grid, &v.occupied);
-    match (v.params.tables, v.params.skip) {
-        (Tables::Dense, Skip::Child) => {
-            trace(&Nodes::<true, false>::new(v), levels, grid, occupied, ray, t_min, t_max, stats)
-        }
-        (Tables::Dense, Skip::Block) => {
-            trace(&Nodes::<true, true>::new(v), levels, grid, occupied, ray, t_min, t_max, stats)
-        }
-        (Tables::Compact, Skip::Child) => {
-            trace(&Nodes::<false, false>::new(v), levels, grid, occupied, ray, t_min, t_max, stats)
-        }
-        (Tables::Compact, Skip::Block) => {
-            trace(&Nodes::<false, true>::new(v), levels, grid, occupied, ray, t_min, t_max, stats)
-        }
-    }
+    with_nodes!(v, |nodes| trace(&nodes, &v.levels, &v.grid, &v.occupied, ray, t_min, t_max, stats))
 }
 
 impl Traverse for Vdb {
@@ -112,6 +183,14 @@ impl Traverse for Vdb {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace_vdb(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut Trace) -> Option<Option<Hit>> {
+        if self.is_empty() {
+            return Some(None);
+        }
+        let (levels, grid, occupied) = (&self.levels, &self.grid, &self.occupied);
+        Some(with_nodes!(self, |nodes| trace_recorded(&nodes, levels, grid, occupied, ray, t_min, t_max, to)))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {

@@ -27,8 +27,11 @@ use scenes::Ray;
 use structures::voxel::wide::{DdaLevels, MAX_DDA_LEVELS, local_slot, spread10};
 use structures::voxel::{VoxelGrid, morton};
 
+use std::cell::RefCell;
+
 use super::octree_ray::{OctreeRay, face_normal, span_is_empty};
-use crate::{Hit, Stats};
+use crate::simt::Trace;
+use crate::{Counters, Hit, Stats, StepKind};
 
 /// What the DDA needs from a wide tree's layout. Levels are numbered from the top cells (0) to
 /// the voxels; below the top, a cell is named by its slot in its parent, the local Morton code
@@ -57,6 +60,132 @@ pub trait WideNodes {
     fn empty_block(&self, _desc: &Self::Desc, _level: usize, _slot: u32, _max: u32) -> u32 {
         0
     }
+}
+
+/// What a layout's WGSL twin reads from its buffers in each accessor (`gpu/<layout>.wgsl`'s
+/// `wide_top`, `wide_fetch`, …), for the warp simulator ([`crate::simt`]): each records into `to`
+/// the reads of the accessor of the same name, called with the same arguments. Data the twin
+/// keeps in registers (a fetched descriptor) reads nothing; so does the default.
+///
+/// The reads are recorded by [`trace_recorded`], which wraps the layout in an accessor that
+/// records them: [`cast`] itself — the timed loop — knows nothing of them.
+pub trait WideReads: WideNodes {
+    fn top_reads(&self, _cell: [u32; 3], _to: &mut Trace) {}
+    fn fetch_reads(&self, _node: Self::Node, _level: usize, _to: &mut Trace) {}
+    fn occupied_reads(&self, _desc: &Self::Desc, _level: usize, _slot: u32, _to: &mut Trace) {}
+    fn child_reads(&self, _node: Self::Node, _desc: &Self::Desc, _level: usize, _slot: u32, _to: &mut Trace) {}
+    fn empty_block_reads(&self, _desc: &Self::Desc, _level: usize, _slot: u32, _max: u32, _to: &mut Trace) {}
+}
+
+/// A layout whose accessors record their reads (its [`WideReads`]) into the trace the cast's
+/// counters go to, in the order the loop calls them. A child's lookup or a node's fetch inside
+/// the loop opens the body of a PUSH step.
+struct Recorded<'a, N> {
+    nodes: &'a N,
+    trace: &'a RefCell<Trace>,
+}
+
+/// Names the current step a PUSH (a descent) unless it is named: from its first lookup on, the
+/// reads are the branch's own. Before the loop's first step there is no step to name.
+fn descending(trace: &RefCell<Trace>) {
+    let mut trace = trace.borrow_mut();
+    if trace.iterations().last().is_some_and(|it| it.kind.is_none()) {
+        trace.step_kind(StepKind::Descend);
+    }
+}
+
+impl<N: WideReads> WideNodes for Recorded<'_, N> {
+    type Node = N::Node;
+    type Desc = N::Desc;
+
+    fn top(&self, cell: [u32; 3]) -> Option<N::Node> {
+        self.nodes.top_reads(cell, &mut self.trace.borrow_mut());
+        self.nodes.top(cell)
+    }
+    fn fetch(&self, node: N::Node, level: usize) -> N::Desc {
+        descending(self.trace);
+        self.nodes.fetch_reads(node, level, &mut self.trace.borrow_mut());
+        self.nodes.fetch(node, level)
+    }
+    fn occupied(&self, desc: &N::Desc, level: usize, slot: u32) -> bool {
+        self.nodes.occupied_reads(desc, level, slot, &mut self.trace.borrow_mut());
+        self.nodes.occupied(desc, level, slot)
+    }
+    fn child(&self, node: N::Node, desc: &N::Desc, level: usize, slot: u32) -> N::Node {
+        descending(self.trace);
+        self.nodes.child_reads(node, desc, level, slot, &mut self.trace.borrow_mut());
+        self.nodes.child(node, desc, level, slot)
+    }
+    fn empty_block(&self, desc: &N::Desc, level: usize, slot: u32, max: u32) -> u32 {
+        self.nodes.empty_block_reads(desc, level, slot, max, &mut self.trace.borrow_mut());
+        self.nodes.empty_block(desc, level, slot, max)
+    }
+}
+
+/// The cast's counters, into the trace its accessors record into. [`cast`] names no step kinds
+/// (a call in the timed loop, even a no-op one, changes its code: +28 % instructions on the
+/// brickmap under callgrind), so they are read off the counting it does: a level step is an
+/// ADVANCE, a push or its accessors ([`Recorded`]) a PUSH, and [`trace_recorded`] names the rest.
+struct Shared<'a>(&'a RefCell<Trace>);
+
+impl Stats for Shared<'_> {
+    const COUNTING: bool = true;
+
+    fn step(&mut self) {
+        self.0.borrow_mut().step();
+    }
+    fn visit(&mut self) {
+        self.0.borrow_mut().visit();
+    }
+    fn prim_test(&mut self) {
+        self.0.borrow_mut().prim_test();
+    }
+    fn push(&mut self) {
+        descending(self.0);
+        self.0.borrow_mut().push();
+    }
+    fn pop(&mut self) {
+        self.0.borrow_mut().pop();
+    }
+    fn at_bound(&mut self) {
+        self.0.borrow_mut().at_bound();
+    }
+    fn level_step(&mut self, level: usize) {
+        let mut trace = self.0.borrow_mut();
+        trace.level_step(level);
+        trace.step_kind(StepKind::Advance);
+    }
+    fn add(&mut self, counters: &Counters) {
+        self.0.borrow_mut().add(counters);
+    }
+}
+
+/// [`trace`] with its steps, their kinds and the layout's reads recorded in `to`. A step the
+/// counting left unnamed took the occupied-cell branch without a PUSH: the hit, if it is the
+/// ray's last, or else the descent into a cell of an empty block (named a descent).
+#[allow(clippy::too_many_arguments)] // trace's, with a trace for its counters
+pub fn trace_recorded<N: WideReads>(
+    nodes: &N,
+    levels: &DdaLevels,
+    grid: &VoxelGrid,
+    occupied: &[Vec3; 2],
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    to: &mut Trace,
+) -> Option<Hit> {
+    let shared = RefCell::new(std::mem::take(to));
+    let hit =
+        trace(&Recorded { nodes, trace: &shared }, levels, grid, occupied, ray, t_min, t_max, &mut Shared(&shared));
+    *to = shared.into_inner();
+    let steps = to.iterations().len();
+    for i in 0..steps {
+        if to.iterations()[i].kind.is_none() {
+            let leaf = hit.is_some() && i + 1 == steps;
+            to.name_step(i, if leaf { StepKind::Leaf } else { StepKind::Descend });
+        }
+    }
+    hit
 }
 
 /// The first set voxel along a ray.

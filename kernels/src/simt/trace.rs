@@ -87,6 +87,11 @@ impl Trace {
         &self.reads
     }
 
+    /// Names the branch iteration `i` took, where the kernel did not name it as it took it.
+    pub fn name_step(&mut self, i: usize, kind: StepKind) {
+        self.iterations[i].kind = Some(kind);
+    }
+
     fn end(&self) -> u32 {
         self.reads.len() as u32
     }
