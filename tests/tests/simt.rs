@@ -14,6 +14,8 @@ const TRACED: &[(&str, &[&str])] = &[
     ("rg", &[]),
     ("rg2", &[]),
     ("org", &[]),
+    ("kdtree", &[]),
+    ("kdtree", &["kdtree.traversal=restart"]),
     ("svo", &["voxel.levels=8"]),
     ("esvo", &["voxel.levels=8"]),
     ("svdag", &["voxel.levels=8", "svdag.leaves=bits"]),

@@ -32,7 +32,15 @@ use super::stack::Stack;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
-use crate::{Counters, Hit, NoStats, Stats, Traverse};
+use crate::{Counters, Hit, NoStats, Stats, StepKind, Traverse};
+
+/// `gpu/kdtree.wgsl`'s buffers, as a trace names them (`crate::simt`).
+const NODES: u32 = 0;
+const REFS: u32 = 1;
+const BOUNDS: u32 = 2;
+const TRIANGLES: u32 = 3;
+const NODE_BYTES: u32 = size_of::<KdNode>() as u32;
+const TRIANGLE_BYTES: u32 = size_of::<scenes::Triangle>() as u32;
 
 /// Relative widening of every interval end (2⁻¹³, as the BVH's cull margin).
 pub(crate) const MARGIN: f32 = 1.0 / 8192.0;
@@ -69,8 +77,11 @@ fn test_leaf<T: TriangleLanes, S: Stats>(
 ) {
     let refs = &tree.refs[leaf.first_ref()..leaf.first_ref() + leaf.count()];
     if S::COUNTING {
-        for _ in refs {
+        stats.step_kind(StepKind::Leaf);
+        for (k, &r) in (leaf.first_ref()..).zip(refs) {
             stats.prim_test();
+            stats.read(REFS, k as u64 * 4, 4);
+            stats.read(TRIANGLES, u64::from(r) * u64::from(TRIANGLE_BYTES), TRIANGLE_BYTES);
         }
     }
     tris.nearest(&tree.triangles, refs, t_min, best_t, best_prim);
@@ -88,6 +99,7 @@ fn trace<T: TriangleLanes, S: Stats>(
     let origin = ray.origin.to_array();
     let dir = ray.dir.to_array();
     let inv = slab::reciprocal(ray.dir);
+    stats.read(BOUNDS, 0, 24);
     let (lo, hi) = (tree.bounds.0.to_array(), tree.bounds.1.to_array());
     let (mut t_near, mut t_far) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max)?;
     let (mut best_t, mut best_prim) = (t_max, u32::MAX);
@@ -98,10 +110,12 @@ fn trace<T: TriangleLanes, S: Stats>(
         loop {
             stats.step();
             stats.visit();
+            stats.read(NODES, node as u64 * u64::from(NODE_BYTES), NODE_BYTES);
             let n = &tree.nodes[node];
             if n.is_leaf() {
                 break;
             }
+            stats.step_kind(StepKind::Inner);
             let Crossing { axis, o, split, near, far } = crossing(n, &origin, &dir);
             if dir[axis] == 0.0 {
                 // Parallel to the plane: the origin's side only, or both when in the plane.
@@ -158,6 +172,7 @@ fn trace_restart<T: TriangleLanes, S: Stats>(
     let origin = ray.origin.to_array();
     let dir = ray.dir.to_array();
     let inv = slab::reciprocal(ray.dir);
+    stats.read(BOUNDS, 0, 24);
     let (lo, hi) = (tree.bounds.0.to_array(), tree.bounds.1.to_array());
     let Some((t_enter, t_exit)) = slab::interval(&origin, &inv, &lo, &hi, t_min, t_max) else {
         return Some(None);
@@ -173,10 +188,12 @@ fn trace_restart<T: TriangleLanes, S: Stats>(
         loop {
             stats.step();
             stats.visit();
+            stats.read(NODES, node as u64 * u64::from(NODE_BYTES), NODE_BYTES);
             let n = &tree.nodes[node];
             if n.is_leaf() {
                 break;
             }
+            stats.step_kind(StepKind::Inner);
             let Crossing { axis, o, split, near, far } = crossing(n, &origin, &dir);
             let t_split = (split - o) * inv[axis];
             let tie = |t: f32| (t_split - t).abs() <= RESTART_TIE * t;
@@ -246,6 +263,10 @@ impl Traverse for KdTree {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         triangle4::run_on(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut crate::simt::Trace) -> Option<Option<Hit>> {
+        Some(triangle4::run_on(self, ray, t_min, t_max, to))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
