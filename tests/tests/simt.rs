@@ -16,6 +16,8 @@ const TRACED: &[(&str, &[&str])] = &[
     ("org", &[]),
     ("kdtree", &[]),
     ("kdtree", &["kdtree.traversal=restart"]),
+    ("octree", &[]),
+    ("octree", &["octree.mailbox=off"]),
     ("svo", &["voxel.levels=8"]),
     ("esvo", &["voxel.levels=8"]),
     ("svdag", &["voxel.levels=8", "svdag.leaves=bits"]),

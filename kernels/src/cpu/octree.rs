@@ -33,7 +33,7 @@ use super::slab;
 use super::triangle::nearest_hit;
 use super::triangle4::{self, LaneKernel, TriangleLanes};
 use crate::gpu::GpuProgram;
-use crate::{Counters, Hit, NoStats, Stats, Traverse, ray_is_traceable};
+use crate::{Counters, Hit, NoStats, Stats, StepKind, Traverse, ray_is_traceable};
 
 /// Entries of the per-ray mailbox (triangle id modulo this).
 pub(crate) const MAILBOX: usize = 8;
@@ -57,6 +57,15 @@ struct RayT {
     t_min: f32,
     t_max: f32,
 }
+
+/// `gpu/octree.wgsl`'s buffers, as a trace names them (`crate::simt`), and the bytes of a record
+/// and of a triangle.
+const HEADER: u32 = 0;
+const RECORDS: u32 = 1;
+const REFS: u32 = 2;
+const TRIANGLES: u32 = 3;
+const RECORD_BYTES: u64 = 8;
+const TRIANGLE_BYTES: u32 = size_of::<scenes::Triangle>() as u32;
 
 /// `t − M·|t|`: an entry parameter lowered by the margin (NaN for +inf: the cell is refused).
 #[inline(always)]
@@ -164,9 +173,12 @@ fn walk<T: TriangleLanes, S: Stats>(
     let mut mailbox = [u32::MAX; MAILBOX];
     let mailboxing = tree.params.mailbox;
     let mut test_leaf = |record: usize, best_t: &mut f32, best_prim: &mut u32, stats: &mut S| {
+        stats.read(RECORDS, record as u64 * RECORD_BYTES, 8);
         let [count, first] = tree.records[record];
         let (mut quad, mut n) = ([0u32; WIDTH], 0);
-        for &prim in &tree.refs[first as usize..(first + count) as usize] {
+        for (k, &prim) in (first..).zip(&tree.refs[first as usize..(first + count) as usize]) {
+            // A ref the mailbox skips is read too (its read counts with the test before it).
+            stats.read(REFS, u64::from(k) * 4, 4);
             if mailboxing {
                 let slot = &mut mailbox[prim as usize % MAILBOX];
                 if *slot == prim {
@@ -175,6 +187,7 @@ fn walk<T: TriangleLanes, S: Stats>(
                 *slot = prim;
             }
             stats.prim_test();
+            stats.read(TRIANGLES, u64::from(prim) * u64::from(TRIANGLE_BYTES), TRIANGLE_BYTES);
             quad[n] = prim;
             n += 1;
             if n == WIDTH {
@@ -186,11 +199,15 @@ fn walk<T: TriangleLanes, S: Stats>(
             tris.nearest(&tree.triangles, &quad[..n], t_min, best_t, best_prim);
         }
     };
+    stats.read(HEADER, 0, 24);
     stats.step();
     stats.visit();
     if tree.root_is_leaf {
+        stats.step_kind(StepKind::Leaf);
         test_leaf(0, &mut best_t, &mut best_prim, stats);
     } else {
+        stats.step_kind(StepKind::Descend);
+        stats.read(RECORDS, 0, 4);
         let (lo, hi) = tree.root.cell(0, [0; 3]);
         slab::interval(&r.origin, &r.inv, &lo.to_array(), &hi.to_array(), t_min, t_max)?;
         let mut stack = [Frame::default(); MAX_DEPTH as usize];
@@ -202,18 +219,23 @@ fn walk<T: TriangleLanes, S: Stats>(
             let f = &mut stack[sp - 1];
             if f.next == f.len || f.entries[f.next as usize] > best_t {
                 // The level's remaining children all start beyond the nearest hit.
+                stats.step_kind(StepKind::Advance);
                 sp -= 1;
                 stats.pop();
                 continue;
             }
             let slot = f.slots[f.next as usize];
             f.next += 1;
+            stats.read(RECORDS, u64::from(f.record) * RECORD_BYTES, 8);
             let parent = &tree.records[f.record as usize];
             let child = layout::child(parent, u32::from(slot));
             stats.visit();
             if layout::leaf_mask(parent) >> slot & 1 == 1 {
+                stats.step_kind(StepKind::Leaf);
                 test_leaf(child, &mut best_t, &mut best_prim, stats);
             } else {
+                stats.step_kind(StepKind::Descend);
+                stats.read(RECORDS, child as u64 * RECORD_BYTES, 4);
                 let cell = [0, 1, 2].map(|a| 2 * f.cell[a] + (u32::from(slot) >> a & 1));
                 stack[sp] = Frame::new(tree, &r, child as u32, cell, sp as u32, best_t);
                 sp += 1;
@@ -231,6 +253,10 @@ impl Traverse for TriOctree {
 
     fn intersect_counted(&self, ray: &Ray, t_min: f32, t_max: f32, counters: &mut Counters) -> Option<Hit> {
         trace(self, ray, t_min, t_max, counters)
+    }
+
+    fn intersect_traced(&self, ray: &Ray, t_min: f32, t_max: f32, to: &mut crate::simt::Trace) -> Option<Option<Hit>> {
+        Some(trace(self, ray, t_min, t_max, to))
     }
 
     fn gpu_program(&self, _camera: &Camera) -> Option<GpuProgram<'_>> {
