@@ -1,15 +1,19 @@
-//! The warp simulator (`kernels::simt`, issue 45) on one structure's primary rays: the camera rays
-//! of a scene at `size`² in the dispatch's tile-major order, traced and run 32 to a warp, with a
-//! plain render of the same rays (on as many threads) timed beside it (the simulation's cost):
+//! The warp simulator (`kernels::simt`, issue 45) on one structure's rays: the camera rays of a
+//! scene at `size`² in the dispatch's tile-major order (or, with `workload=shadow` or
+//! `workload=ao8`, the primary hits' secondary rays), traced and run 32 to a warp, with a plain
+//! trace of the same rays (on as many threads) timed beside it (the simulation's cost):
 //!
 //! ```sh
 //! cargo run --example simt -p harness -- dragon 256 bvh
+//! cargo run --example simt -p harness -- dragon 256 esvo workload=ao8
 //! ```
 //!
-//! Arguments: scene, size, structure, then any `key=value` structure parameters.
+//! Arguments: scene, size, structure, then any `key=value` structure parameters and `workload=`.
 
 use std::time::Instant;
 
+use anyhow::Context;
+use kernels::cpu::render::{ShadeContext, Workload};
 use kernels::simt;
 use rayon::prelude::*;
 use scenes::Camera;
@@ -20,15 +24,24 @@ fn main() -> anyhow::Result<()> {
     let scene_name = args.get(1).map_or("dragon", String::as_str);
     let size: u32 = args.get(2).map_or(Ok(256), |s| s.parse())?;
     let structure = args.get(3).map_or("bvh", String::as_str);
-    let params = Params::parse(args.iter().skip(4).map(String::as_str))?;
+    // `workload=shadow` or `workload=ao8` among the parameters simulates those rays instead.
+    let workload = match args.iter().skip(4).find_map(|a| a.strip_prefix("workload=")) {
+        None | Some("primary") => Workload::Primary,
+        Some("shadow") => Workload::Shadow,
+        Some(ao) => Workload::Ao {
+            samples: ao.strip_prefix("ao").and_then(|n| n.parse().ok()).context("workload=primary|shadow|aoN")?,
+        },
+    };
+    let params = Params::parse(args.iter().skip(4).filter(|a| !a.starts_with("workload=")).map(String::as_str))?;
     let scene = scenes::load_scene(scene_name)?;
     let camera = Camera::new(scene.camera_spec(), size, size);
     let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
     let accel = kernels::registry::build_structure(structure, &input)
         .ok_or_else(|| anyhow::anyhow!("no structure '{structure}'"))??;
-    let rays = simt::dispatch_rays(&camera);
+    let shade = ShadeContext::for_scene(&scene, 0);
+    let rays = simt::workload_rays(accel.as_ref(), &camera, &shade, workload);
     let start = Instant::now();
-    let plain: Vec<_> = rays.par_iter().map(|r| accel.intersect(r, 0.0, f32::INFINITY)).collect();
+    let plain: Vec<_> = rays.par_iter().map(|(r, t_max)| accel.intersect(r, 0.0, *t_max)).collect();
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let mut hits = Vec::new();
@@ -39,7 +52,9 @@ fn main() -> anyhow::Result<()> {
     let t = &sim.tally;
     let rays_n = t.rays.max(1) as f64;
     println!(
-        "{scene_name} {size}² {structure}: SIMT efficiency {:.3}; warp-steps/ray {:.2} (steps/ray {:.2}); sectors/ray {:.2}, lines/ray {:.2}, bytes requested/ray {:.1}",
+        "{scene_name} {size}² {structure} {}: {} rays, SIMT efficiency {:.3}; warp-steps/ray {:.2} (steps/ray {:.2}); sectors/ray {:.2}, lines/ray {:.2}, bytes requested/ray {:.1}",
+        workload.name(),
+        t.rays,
         t.efficiency().unwrap_or(0.0),
         t.warp_steps_per_ray(),
         t.lane_steps.iter().sum::<u64>() as f64 / rays_n,

@@ -376,19 +376,24 @@ pub(crate) fn timed_renders(
         reference_timing: reference.map(|_| Timing::from_samples(&reference_samples)),
         gpu: None,
         uncounted: uncounted(accel.counted()),
-        simt: match workload {
-            Workload::Primary => phases::time(Phase::Simulation, || simulate(accel, camera)),
-            _ => None,
-        },
+        simt: phases::time(Phase::Simulation, || simulate(accel, camera, shade, workload)),
     };
     (stats, frame, heat)
 }
 
-/// The warp simulator over `camera`'s primary rays in the dispatch's tile-major order, where
-/// the structure's kernel records traces (issue 45).
-fn simulate(accel: &dyn Accel, camera: &Camera) -> Option<reports::SimtStats> {
+/// The warp simulator over the rays of `workload` in a GPU dispatch's order (the camera's in
+/// tile-major order, or the primary hits' secondary rays), where the structure's kernel records
+/// traces (issue 45).
+fn simulate(
+    accel: &dyn Accel,
+    camera: &Camera,
+    shade: &ShadeContext,
+    workload: Workload,
+) -> Option<reports::SimtStats> {
     use kernels::simt;
-    let rays = simt::dispatch_rays(camera);
+    // A kernel that records no trace says so on any ray: no secondary rays cast for nothing.
+    accel.intersect_traced(&camera.ray(0, 0), 0.0, f32::INFINITY, &mut simt::Trace::default())?;
+    let rays = simt::workload_rays(accel, camera, shade, workload);
     let t = Instant::now();
     let sim = simt::simulate(accel, &rays, &simt::L2_SIZES, simt::IN_FLIGHT, &mut Vec::new())?;
     let tally = &sim.tally;

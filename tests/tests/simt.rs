@@ -3,6 +3,7 @@
 //! bit for bit as its plain, timed path, on every built-in scene over the shared ray set and the
 //! camera's rays; and every read it records lies inside the GPU buffer it names.
 
+use kernels::cpu::render::{ShadeContext, Workload};
 use kernels::simt::{self, Trace};
 use structures::{BuildInput, Params};
 use tests::{per_builtin_scene, ray_set};
@@ -32,9 +33,11 @@ const TRACED: &[(&str, &[&str])] = &[
 fn check(scene_name: &str) {
     let scene = scenes::load_scene(scene_name).expect("scene");
     let triangles = scene.triangles();
-    let mut rays: Vec<scenes::Ray> = ray_set(&scene, &triangles, 600, 45).into_iter().map(|r| r.ray).collect();
-    let camera = scenes::Camera::new(scene.camera_spec(), 24, 24);
-    rays.extend((0..24).flat_map(|y| (0..24).map(move |x| (x, y))).map(|(x, y)| camera.ray(x, y)));
+    let mut rays: Vec<(scenes::Ray, f32)> =
+        ray_set(&scene, &triangles, 600, 45).into_iter().map(|r| (r.ray, f32::INFINITY)).collect();
+    let view = scenes::Camera::new(scene.camera_spec(), 24, 24);
+    rays.extend(simt::dispatch_rays(&view));
+    let shade = ShadeContext::for_scene(&scene, 7);
     for &(name, settings) in TRACED {
         let params = Params::parse(settings.iter().copied()).expect("parameters");
         let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
@@ -47,15 +50,20 @@ fn check(scene_name: &str) {
             .iter()
             .map(|b| b.bytes())
             .collect();
+        // And the shadow and ambient-occlusion rays of the camera's hits, over their finite spans.
+        let mut rays = rays.clone();
+        for workload in [Workload::Shadow, Workload::Ao { samples: 2 }] {
+            rays.extend(simt::workload_rays(accel.as_ref(), &view, &shade, workload));
+        }
         let mut trace = Trace::default();
-        for (i, ray) in rays.iter().enumerate() {
+        for (i, &(ref ray, t_max)) in rays.iter().enumerate() {
             trace.clear();
-            let traced = accel.intersect_traced(ray, 0.0, f32::INFINITY, &mut trace).expect("traced");
-            let plain = accel.intersect(ray, 0.0, f32::INFINITY);
+            let traced = accel.intersect_traced(ray, 0.0, t_max, &mut trace).expect("traced");
+            let plain = accel.intersect(ray, 0.0, t_max);
             let bits = |h: Option<kernels::Hit>| h.map(|h| (h.t.to_bits(), h.prim));
             assert_eq!(bits(traced), bits(plain), "{name} on {scene_name}, ray {i}: hits differ with tracing on");
             let mut counted = kernels::Counters::default();
-            accel.intersect_counted(ray, 0.0, f32::INFINITY, &mut counted);
+            accel.intersect_counted(ray, 0.0, t_max, &mut counted);
             assert_eq!(trace.counters, counted, "{name} on {scene_name}, ray {i}: the trace counts differently");
             assert_eq!(trace.iterations().len() as u64, counted.steps, "{name} on {scene_name}, ray {i}");
             let tests: u64 = trace.iterations().iter().map(|it| u64::from(it.tests.end - it.tests.start)).sum();
@@ -91,7 +99,7 @@ fn the_simulation_does_not_depend_on_the_thread_count() {
     let input = BuildInput { scene: &scene, triangles: scene.triangles(), params: &params };
     let accel = kernels::build_structure("bvh", &input).expect("registered").expect("built");
     let camera = scenes::Camera::new(scene.camera_spec(), 96, 96);
-    let rays: Vec<scenes::Ray> = (0..96 * 96).map(|i| camera.ray(i % 96, i / 96)).collect();
+    let rays = simt::dispatch_rays(&camera);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         pool.install(|| {

@@ -336,33 +336,78 @@ fn shade_hit(
     let Some(hit) = hit else {
         return Sample::MISS;
     };
-    // Face the normal towards the viewer so secondary rays leave on the visible side.
-    let n = if hit.normal.dot(ray.dir) > 0.0 { -hit.normal } else { hit.normal };
-    let p = ray.at(hit.t) + n * ctx.epsilon;
+    let (p, n) = lift(ctx, ray, &hit);
     let shade = match workload {
         Workload::Primary => n.dot(-ray.dir).abs(),
         Workload::Shadow => {
-            let to_light = ctx.light - p;
-            let lambert = n.dot(to_light.normalize_or_zero()).max(0.0);
-            let blocked = occluded(accel, &Ray::new(p, to_light), 1.0 - 1e-4, counters);
+            let lambert = n.dot((ctx.light - p).normalize_or_zero()).max(0.0);
+            let (shadow, t_max) = shadow_ray(ctx, p);
+            let blocked = occluded(accel, &shadow, t_max, counters);
             if blocked { 0.0 } else { lambert }
         }
         Workload::Ao { samples } => {
-            let (t1, t2) = n.any_orthonormal_pair();
             let pixel = y * camera.width + x;
             let open = (0..samples)
                 .filter(|&k| {
-                    let (u1, u2) = (unit_hash(ctx.seed, pixel, 2 * k), unit_hash(ctx.seed, pixel, 2 * k + 1));
-                    // Cosine-weighted hemisphere direction (Malley's method).
-                    let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
-                    let dir = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                    !occluded(accel, &Ray::new(p, dir), ctx.ao_radius, counters)
+                    let (ao, t_max) = ao_ray(ctx, p, n, pixel, k);
+                    !occluded(accel, &ao, t_max, counters)
                 })
                 .count();
             open as f32 / samples.max(1) as f32
         }
     };
     Sample { t: hit.t, shade, normal: hit.normal, prim: hit.prim }
+}
+
+/// Where a hit's secondary rays leave from: the hit point lifted off the surface along its normal
+/// turned towards the viewer (so they leave on the visible side), and that normal.
+#[inline(always)]
+fn lift(ctx: &ShadeContext, ray: &Ray, hit: &crate::Hit) -> (Vec3, Vec3) {
+    let n = if hit.normal.dot(ray.dir) > 0.0 { -hit.normal } else { hit.normal };
+    (ray.at(hit.t) + n * ctx.epsilon, n)
+}
+
+/// The shadow ray from `p` towards the scene's light, and the end of its span (just short of it).
+#[inline(always)]
+fn shadow_ray(ctx: &ShadeContext, p: Vec3) -> (Ray, f32) {
+    (Ray::new(p, ctx.light - p), 1.0 - 1e-4)
+}
+
+/// Ambient-occlusion ray `k` of `pixel` from `p` about the normal `n`, and the end of its span.
+#[inline(always)]
+fn ao_ray(ctx: &ShadeContext, p: Vec3, n: Vec3, pixel: u32, k: u32) -> (Ray, f32) {
+    let (t1, t2) = n.any_orthonormal_pair();
+    let (u1, u2) = (unit_hash(ctx.seed, pixel, 2 * k), unit_hash(ctx.seed, pixel, 2 * k + 1));
+    // Cosine-weighted hemisphere direction (Malley's method).
+    let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+    let dir = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+    (Ray::new(p, dir), ctx.ao_radius)
+}
+
+/// The secondary rays a render of `workload` casts, each with the end of its span, in the order a
+/// GPU's second dispatch would take them: the pixels' in the dispatch's tile-major order
+/// ([`Frame::pixel_of`]), only the pixels whose primary ray hit (compacted, as a wavefront
+/// renderer queues them), a pixel's AO samples consecutive. Empty for primary rays.
+pub fn secondary_rays(
+    accel: &(impl Traverse + ?Sized),
+    camera: &Camera,
+    ctx: &ShadeContext,
+    workload: Workload,
+) -> Vec<(Ray, f32)> {
+    let (w, h) = (camera.width, camera.height);
+    let pixels: Vec<(u32, u32)> =
+        (0..Frame::sample_count(w, h)).map(|i| Frame::pixel_of(w, i)).filter(|&(x, y)| x < w && y < h).collect();
+    let per_pixel = |&(x, y): &(u32, u32)| -> Vec<(Ray, f32)> {
+        let ray = camera.ray(x, y);
+        let Some(hit) = accel.intersect(&ray, 0.0, f32::INFINITY) else { return Vec::new() };
+        let (p, n) = lift(ctx, &ray, &hit);
+        match workload {
+            Workload::Primary => Vec::new(),
+            Workload::Shadow => vec![shadow_ray(ctx, p)],
+            Workload::Ao { samples } => (0..samples).map(|k| ao_ray(ctx, p, n, y * w + x, k)).collect(),
+        }
+    };
+    pixels.par_iter().flat_map_iter(per_pixel).collect()
 }
 
 /// A uniform number in [0, 1) from (seed, pixel, index): the PCG output hash, chosen because the

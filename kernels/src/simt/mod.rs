@@ -83,28 +83,44 @@ pub struct Simulated {
 }
 
 /// The primary rays of `camera` in the GPU dispatch's order (the renderer's tile-major order,
-/// `cpu::render::Frame::pixel_of`; no padding): what [`simulate`] groups 32 to a warp.
-pub fn dispatch_rays(camera: &scenes::Camera) -> Vec<Ray> {
+/// `cpu::render::Frame::pixel_of`; no padding), each with its span's end (none): what
+/// [`simulate`] groups 32 to a warp.
+pub fn dispatch_rays(camera: &scenes::Camera) -> Vec<(Ray, f32)> {
     use crate::cpu::render::Frame;
     let (w, h) = (camera.width, camera.height);
     (0..Frame::sample_count(w, h))
         .map(|i| Frame::pixel_of(w, i))
         .filter(|&(x, y)| x < w && y < h)
-        .map(|(x, y)| camera.ray(x, y))
+        .map(|(x, y)| (camera.ray(x, y), f32::INFINITY))
         .collect()
+}
+
+/// The rays a render of `workload` traces in a dispatch of their own: the primary rays
+/// ([`dispatch_rays`]), or the secondary rays of the primary hits (shadow or ambient-occlusion
+/// rays, `cpu::render::secondary_rays`: a second dispatch, compacted, in pixel order).
+pub fn workload_rays(
+    accel: &(impl Traverse + ?Sized),
+    camera: &scenes::Camera,
+    ctx: &crate::cpu::render::ShadeContext,
+    workload: crate::cpu::render::Workload,
+) -> Vec<(Ray, f32)> {
+    match workload {
+        crate::cpu::render::Workload::Primary => dispatch_rays(camera),
+        _ => crate::cpu::render::secondary_rays(accel, camera, ctx, workload),
+    }
 }
 
 /// Warps traced at a time (in parallel), before their memory instructions go through the L2s in
 /// dispatch order: bounds the memory a simulation holds.
 const BLOCK_WARPS: usize = 256;
 
-/// Traces `rays` (in dispatch order: a warp is 32 consecutive rays) through `accel` and runs the
+/// Traces `rays` (in dispatch order: a warp is 32 consecutive rays; each over `(0, its t_max)`) through `accel` and runs the
 /// warps through the models; `None` where the kernel records no trace. `hits` receives each
 /// ray's hit (the traced kernel's, for checking against the plain one). Warps are traced in
 /// parallel; the figures do not depend on the thread count.
 pub fn simulate(
     accel: &(impl Traverse + ?Sized),
-    rays: &[Ray],
+    rays: &[(Ray, f32)],
     l2_sizes: &[u64],
     in_flight: usize,
     hits: &mut Vec<Option<Hit>>,
@@ -120,9 +136,9 @@ pub fn simulate(
                 || vec![Trace::default(); WARP],
                 |lanes, warp| {
                     let mut found = Vec::with_capacity(warp.len());
-                    for (lane, ray) in lanes.iter_mut().zip(warp) {
+                    for (lane, (ray, t_max)) in lanes.iter_mut().zip(warp) {
                         lane.clear();
-                        found.push(accel.intersect_traced(ray, 0.0, f32::INFINITY, lane)?);
+                        found.push(accel.intersect_traced(ray, 0.0, *t_max, lane)?);
                     }
                     let mut tally = Tally::default();
                     let mut steps = WarpSteps::default();
