@@ -1,5 +1,5 @@
 //! "GPU behaviour (simulated)" (issue 45): per scene, for every structure whose kernel records
-//! traces, what its primary rays would do on SIMT hardware — the warp simulator's figures
+//! traces, what its rays (primary, shadow, ambient occlusion) would do on SIMT hardware — the warp simulator's figures
 //! (`kernels::simt`) beside the CPU speed. Labelled simulated until a GPU has timed the same cases.
 
 use std::fmt::Write;
@@ -18,8 +18,10 @@ pub fn scene_table(cases: &[&Case]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "GPU behaviour (simulated, not measured on a GPU): the primary rays' traces run 32 to a warp in the \
-         dispatch's order, in lock-step as the WGSL loop runs; efficiency is active lanes over issued lanes \
+        "GPU behaviour (simulated, not measured on a GPU): each workload's rays are traced and run 32 to a warp \
+         in lock-step as the WGSL loop runs — primary rays in the dispatch's tile-major order; shadow and \
+         ambient-occlusion rays as a second dispatch of the primary hits' rays, compacted, in pixel order, a \
+         pixel's samples together; efficiency is active lanes over issued lanes \
          (overall, and per kind of step: inner nodes or bricks, leaves or cells, primitive tests, an octree's \
          descents and advances); lane-steps are a ray's loop iterations and primitive tests, \
          warp-steps the issues its warp spends on it in lane units (lane-steps ÷ efficiency); sectors are \
