@@ -57,7 +57,8 @@ mod tests {
     use crate::Traverse;
     use crate::gpu::{DispatchOptions, FrameUniform, GpuRay, context_for_tests, run_program};
 
-    /// The GPU's answers to `rays` against the crate's CPU traversal, bit for bit.
+    /// The GPU's answers to `rays` against the crate's CPU traversal, bit for bit, and its steps
+    /// against the iterations of the simulator's walk.
     fn assert_agrees(bvh: &ObvhsCwbvh, rays: &[(Ray, f32, f32)], what: &str) {
         let Some(ctx) = context_for_tests(what) else {
             return;
@@ -67,10 +68,24 @@ mod tests {
         let opts = DispatchOptions { warmup: 0, reps: 1, count_steps: true, split_words: None, ..Default::default() };
         let program = program(bvh).expect("a program");
         let run = run_program(ctx, &program, &gpu_rays, &frame, &opts).expect("runs");
+        let counted = run.counted.as_ref().expect("a counted run");
         let mut hits = 0;
-        for (k, ((ray, t0, t1), gpu)) in rays.iter().zip(&run.hits).enumerate() {
+        for (k, (((ray, t0, t1), gpu), steps)) in rays.iter().zip(&run.hits).zip(counted).enumerate() {
             let cpu = bvh.intersect(ray, *t0, *t1);
             assert!(!gpu.at_bound, "{what}: ray {k} ended at the bound");
+            // The warp simulator's walk (`cpu::obvhs`) takes this kernel's iterations, ray for ray.
+            let mut trace = crate::simt::Trace::default();
+            let traced = bvh.intersect_traced(ray, *t0, *t1, &mut trace).expect("cwbvh records traces");
+            assert_eq!(
+                traced.map(|h| (h.t.to_bits(), h.prim)),
+                cpu.map(|h| (h.t.to_bits(), h.prim)),
+                "{what}: ray {k}"
+            );
+            // (A span from +∞ is the exception: this kernel ends it before its loop, the CPU's
+            // walk enters the root once; both miss.)
+            if t0.is_finite() {
+                assert_eq!(steps.steps as usize, trace.iterations().len(), "{what}: ray {k}: the traced walk's steps");
+            }
             match cpu {
                 Some(c) => {
                     hits += 1;
