@@ -52,6 +52,11 @@ fn a_run_writes_results_report_and_images() {
     let shadow = &renders[1];
     let hits = (primary["hit_fraction"].as_f64().expect("hit fraction") * 48.0 * 32.0).round() as u64;
     assert_eq!(shadow["rays"].as_u64(), Some(48 * 32 + hits), "one shadow ray per primary hit");
+    // The simulated GPU runs each workload's own rays: the shadow row's are the hits' shadow rays.
+    for r in [primary, shadow] {
+        assert!(r["simt"]["warp_steps_per_ray"].as_f64().is_some_and(|w| w > 0.0), "{r}");
+    }
+    assert_ne!(primary["simt"], shadow["simt"]);
     assert!(results["machine"]["cores"].as_u64().is_some_and(|c| c >= 1));
     assert!(results["settings"]["build_profile"].as_str().is_some_and(|p| p.contains("opt-level")));
 
@@ -59,6 +64,7 @@ fn a_run_writes_results_report_and_images() {
     assert_eq!(jsonl.lines().count(), 2);
     let report = std::fs::read_to_string(out.join("report.md")).expect("report.md");
     assert!(report.contains("## teapot") && report.contains("## flat"));
+    assert!(report.contains("| bvh | primary |") && report.contains("| bvh | shadow |"), "simulated rows per workload");
     let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
     assert!(html.contains("<h2>teapot</h2>") && html.contains("<svg"));
     // Shaded images and heat maps as inline thumbnails (the reference has no difference view).
