@@ -125,7 +125,8 @@ pub fn render_volume(
         GpuVolume::Dense | GpuVolume::Bricks(_) => Vec::new(),
     };
     let mut tree = Vec::new();
-    if !levels.is_empty() {
+    // A tree walk reads its level count first, zero levels included.
+    if matches!(walk, GpuVolume::Octree(_) | GpuVolume::Tree(_)) {
         tree = vec![levels.len() as u32];
         let mut tables = Vec::new();
         let start = 1 + TREE_LEVEL_WORDS * levels.len() as u32;
