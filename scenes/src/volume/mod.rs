@@ -16,6 +16,7 @@ pub mod fog;
 pub mod nifti;
 pub mod procedural;
 pub mod raw;
+pub mod store;
 
 use std::path::Path;
 
