@@ -30,6 +30,7 @@ pub mod bricks;
 pub mod dense;
 pub mod ntree;
 pub mod octree;
+pub mod ooc;
 
 use glam::Vec3;
 use rayon::prelude::*;
