@@ -165,27 +165,13 @@ impl<'a> Sampler<'a> {
     /// into the volume.
     #[inline]
     pub fn value(&self, p: Vec3) -> f32 {
-        let mut i = [0u32; 3];
-        let mut f = [0.0f32; 3];
-        for a in 0..3 {
-            let u = p[a] * self.inv_spacing[a];
-            // Clamped before the truncating `as`: the floor for what remains (NaN goes to 0).
-            let cell = if self.last[a] == 0 { 0 } else { u.clamp(0.0, (self.last[a] - 1) as f32) as u32 };
-            i[a] = cell;
-            f[a] = (u - cell as f32).clamp(0.0, 1.0);
-        }
-        let at = |dx: u32, dy: u32, dz: u32| {
+        let (i, f) = cell_at(p, self.inv_spacing, self.last);
+        interpolate(f, |dx, dy, dz| {
             let x = (i[0] + dx).min(self.last[0]);
             let y = (i[1] + dy).min(self.last[1]);
             let z = (i[2] + dz).min(self.last[2]);
             self.volume.value(x, y, z)
-        };
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let x00 = lerp(at(0, 0, 0), at(1, 0, 0), f[0]);
-        let x10 = lerp(at(0, 1, 0), at(1, 1, 0), f[0]);
-        let x01 = lerp(at(0, 0, 1), at(1, 0, 1), f[0]);
-        let x11 = lerp(at(0, 1, 1), at(1, 1, 1), f[0]);
-        lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+        })
     }
 
     /// The domain: the box of the voxel centres.
@@ -193,6 +179,50 @@ impl<'a> Sampler<'a> {
         let b = self.volume.bounds();
         (b.min, b.max)
     }
+}
+
+/// The lattice cell holding `p` (a position in the volume's frame; `inv_spacing` the reciprocal
+/// voxel edges, `last` the last sample per axis), clamped into the volume, and `p`'s place in it
+/// per axis in `[0, 1]`: the one arithmetic every sampler of a volume (in core or in bricks) uses.
+#[inline(always)]
+pub fn cell_at(p: Vec3, inv_spacing: [f32; 3], last: [u32; 3]) -> ([u32; 3], [f32; 3]) {
+    let mut i = [0u32; 3];
+    let mut f = [0.0f32; 3];
+    for a in 0..3 {
+        let u = p[a] * inv_spacing[a];
+        // Clamped before the truncating `as`: the floor for what remains (NaN goes to 0).
+        let cell = if last[a] == 0 { 0 } else { u.clamp(0.0, (last[a] - 1) as f32) as u32 };
+        i[a] = cell;
+        f[a] = (u - cell as f32).clamp(0.0, 1.0);
+    }
+    (i, f)
+}
+
+/// The trilinear interpolation by `f` of a cell's corners (`at(dx, dy, dz)`, each 0 or 1), in
+/// one order of operations for every sampler.
+#[inline(always)]
+pub fn interpolate(f: [f32; 3], at: impl Fn(u32, u32, u32) -> f32) -> f32 {
+    let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+    let x00 = lerp(at(0, 0, 0), at(1, 0, 0), f[0]);
+    let x10 = lerp(at(0, 1, 0), at(1, 1, 0), f[0]);
+    let x01 = lerp(at(0, 0, 1), at(1, 0, 1), f[0]);
+    let x11 = lerp(at(0, 1, 1), at(1, 1, 1), f[0]);
+    lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+}
+
+/// Front-to-back emission–absorption of one sample of colour and opacity `rgba` into `rgb` and the
+/// transmittance `t`; `false` once the ray has terminated ([`MIN_TRANSMITTANCE`]).
+#[inline(always)]
+pub fn blend(rgb: &mut [f32; 3], t: &mut f32, [r, g, b, alpha]: [f32; 4]) -> bool {
+    if alpha > 0.0 {
+        let w = *t * alpha;
+        *rgb = [rgb[0] + w * r, rgb[1] + w * g, rgb[2] + w * b];
+        *t *= 1.0 - alpha;
+        if *t < MIN_TRANSMITTANCE {
+            return false;
+        }
+    }
+    true
 }
 
 /// The `k`s of the lattice `t_k = k · step` in the span `[t_a, t_b)`: `⌈t_a / step⌉ .. ⌈t_b / step⌉`.
@@ -240,15 +270,9 @@ impl<'a> Compositor<'a> {
         for k in samples_in(t_a, t_b, self.step) {
             let t = k as f32 * self.step;
             let v = self.sampler.value(self.origin + self.dir * t);
-            let [r, g, b, alpha] = self.tf.eval(v);
             self.samples += 1;
-            if alpha > 0.0 {
-                let w = self.transmittance * alpha;
-                self.rgb = [self.rgb[0] + w * r, self.rgb[1] + w * g, self.rgb[2] + w * b];
-                self.transmittance *= 1.0 - alpha;
-                if self.transmittance < MIN_TRANSMITTANCE {
-                    return false;
-                }
+            if !blend(&mut self.rgb, &mut self.transmittance, self.tf.eval(v)) {
+                return false;
             }
         }
         true

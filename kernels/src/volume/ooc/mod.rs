@@ -7,9 +7,12 @@
 //! - [`cache`]: the cache's slots, their replacement (LRU, clock) and the pinning that keeps a
 //!   brick a waiting ray needs resident for the round.
 //!
-//! Still to come (issue 42): the sample pool and the ray-guided marcher whose images equal the
-//! in-core `dense` marcher's, procedural sources generated brick by brick, the hierarchies used as
+//! - [`march`]: the ray-guided marcher, in rounds of marching and loading, whose images equal the
+//!   in-core `dense` marcher's bit for bit whatever the cache size.
+//!
+//! Still to come (issue 42): procedural sources generated brick by brick, the hierarchies used as
 //! their own page tables, the `volume-ooc` preset and its report section.
 
 pub mod cache;
+pub mod march;
 pub mod page_table;

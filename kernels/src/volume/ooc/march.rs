@@ -1,0 +1,328 @@
+//! Ray-guided marching of an out-of-core volume (issue 42): the frame's rays march the lattice
+//! samples of the dense marcher, in rounds. In a round every unfinished ray marches until it ends
+//! or needs a brick that is not resident — then it records the brick and waits. The round's
+//! requests are de-duplicated, given cache slots ([`SlotCache`]: a brick used in the round is not
+//! evicted) and read from the store in parallel; the waiting rays go on in the next round. A frame
+//! is done when no ray waits. A sample whose brick the transfer function makes wholly transparent
+//! (by the store's per-brick value range) needs no brick: it leaves the ray as it was.
+//!
+//! **The dense marcher's image, bit for bit, whatever the cache size.** A sample is the same
+//! lattice point, its cell the same ([`super::super::cell_at`]), and its eight corners, read from
+//! its cell's brick (whose apron holds the high-side corners, clamped as the sampler clamps), the
+//! same values interpolated in the same order ([`super::super::interpolate`]); the compositing is
+//! the same ([`super::super::blend`]). The cache changes how many rounds a frame takes, never a
+//! pixel.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use scenes::volume::store::BrickStore;
+use scenes::{Camera, Samples, SceneError};
+
+use super::cache::{Allocation, Eviction, SlotCache};
+use super::page_table::{PageTable, Slot};
+use crate::volume::{TransferFunction, VolumeImage, blend, cell_at, interpolate, samples_in};
+
+/// One frame's work.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// March-and-load rounds until no ray waited.
+    pub rounds: u32,
+    /// Bricks read from the store (constant bricks are filled, not read).
+    pub loads: u64,
+    pub bytes_read: u64,
+    /// Translations that found the brick resident, and that did not (a ray then waited).
+    pub hits: u64,
+    pub misses: u64,
+    pub evictions: u64,
+    /// Distinct bricks the frame's samples read.
+    pub working_set: u64,
+}
+
+/// A volume in a brick store, cast through a fixed-size brick cache.
+pub struct OocVolume<T: PageTable> {
+    store: BrickStore,
+    table: T,
+    cache: SlotCache,
+    /// The resident bricks' samples, slot after slot.
+    pool: Samples,
+    /// Per virtual brick, whether the transfer function makes every value of its range transparent.
+    empty: Vec<bool>,
+    inv_spacing: [f32; 3],
+    last: [u32; 3],
+}
+
+/// A ray's state between rounds.
+struct Pending {
+    pixel: usize,
+    origin: Vec3,
+    dir: Vec3,
+    /// The next lattice sample, and the end of the ray's samples.
+    k: i64,
+    end: i64,
+    rgb: [f32; 3],
+    transmittance: f32,
+    samples: u64,
+}
+
+/// What one round did to one ray.
+enum Outcome {
+    Done,
+    /// Waits for this virtual brick.
+    Waits(u32),
+}
+
+impl<T: PageTable + Sync> OocVolume<T> {
+    /// The store's volume through `table` and a cache of `slots` bricks evicted by `policy`.
+    pub fn new(store: BrickStore, table: T, slots: usize, policy: Eviction) -> Self {
+        let cache = SlotCache::new(slots, policy);
+        let pool = store.kind.zeros(cache.slots() * store.grid.samples());
+        let g = store.grid;
+        Self {
+            inv_spacing: store.spacing.map(|s| 1.0 / s),
+            last: g.dims.map(|d| d - 1),
+            empty: vec![false; g.count()],
+            store,
+            table,
+            cache,
+            pool,
+        }
+    }
+
+    /// Bricks that `tf` makes wholly transparent are skipped without being read.
+    pub fn set_transfer_function(&mut self, tf: &TransferFunction) {
+        for (i, e) in self.empty.iter_mut().enumerate() {
+            let entry = self.store.entry(i);
+            *e = !entry.min.is_nan() && tf.is_empty_over(entry.min, entry.max);
+        }
+    }
+
+    pub fn table(&self) -> &T {
+        &self.table
+    }
+
+    /// Renders `camera`'s rays through the volume under `tf` every `step`, as
+    /// `volume::render(&Dense, …)` does.
+    pub fn render(
+        &mut self,
+        camera: &Camera,
+        tf: &TransferFunction,
+        step: f32,
+    ) -> Result<(VolumeImage, FrameStats), SceneError> {
+        let (w, h) = (camera.width, camera.height);
+        let hi = Vec3::from_array(std::array::from_fn(|a| self.last[a] as f32 * self.store.spacing[a]));
+        let mut rgba = vec![[0.0, 0.0, 0.0, 0.0]; (w * h) as usize];
+        let mut rays: Vec<Pending> = (0..w * h)
+            .filter_map(|i| {
+                let ray = camera.ray(i % w, i / w);
+                let inv = crate::cpu::slab::reciprocal(ray.dir);
+                let (t0, t1) = crate::cpu::slab::interval(
+                    &ray.origin.to_array(),
+                    &inv,
+                    &[0.0; 3],
+                    &hi.to_array(),
+                    0.0,
+                    f32::INFINITY,
+                )?;
+                let ks = samples_in(t0, t1, step);
+                Some(Pending {
+                    pixel: i as usize,
+                    origin: ray.origin,
+                    dir: ray.dir,
+                    k: ks.start,
+                    end: ks.end,
+                    rgb: [0.0; 3],
+                    transmittance: 1.0,
+                    samples: 0,
+                })
+            })
+            .collect();
+        let mut stats = FrameStats::default();
+        let mut samples = 0;
+        let mut touched = vec![false; self.empty.len()];
+        let (hits0, misses0, evictions0) = (self.cache.hits, self.cache.misses, self.cache.evictions);
+        while !rays.is_empty() {
+            stats.rounds += 1;
+            self.cache.next_round();
+            // MARCH: every waiting ray as far as the resident bricks take it.
+            let this = &*self;
+            let outcomes: Vec<(Outcome, Vec<u32>)> = rays.par_iter_mut().map(|r| this.march(r, tf, step)).collect();
+            let mut requests = Vec::new();
+            let mut finished = Vec::new();
+            for (i, (outcome, used)) in outcomes.into_iter().enumerate() {
+                for b in used {
+                    self.cache.use_brick(&self.table, b);
+                    touched[b as usize] = true;
+                }
+                match outcome {
+                    Outcome::Done => finished.push(i),
+                    Outcome::Waits(b) => {
+                        self.cache.misses += 1;
+                        requests.push(b);
+                    }
+                }
+            }
+            for &i in finished.iter().rev() {
+                let r = rays.swap_remove(i);
+                rgba[r.pixel] = [r.rgb[0], r.rgb[1], r.rgb[2], 1.0 - r.transmittance];
+                samples += r.samples;
+            }
+            // LOAD: each requested brick once, as long as a slot is not pinned by this round.
+            requests.sort_unstable();
+            requests.dedup();
+            let mut loads: Vec<(Slot, u32)> = Vec::new();
+            for &b in &requests {
+                match self.cache.allocate(&mut self.table, b) {
+                    Allocation::Free(s) | Allocation::Evicted(s, _) => loads.push((s, b)),
+                    Allocation::Full => break,
+                }
+            }
+            loads.sort_unstable();
+            stats.loads += loads.len() as u64;
+            stats.bytes_read += loads.iter().map(|&(_, b)| u64::from(self.store.entry(b as usize).bytes)).sum::<u64>();
+            self.load(&loads)?;
+        }
+        stats.hits = self.cache.hits - hits0;
+        stats.misses = self.cache.misses - misses0;
+        stats.evictions = self.cache.evictions - evictions0;
+        stats.working_set = touched.iter().filter(|&&t| t).count() as u64;
+        Ok((VolumeImage { width: w, height: h, rgba, samples, visits: 0 }, stats))
+    }
+
+    /// Marches `r` from its next sample until it ends or needs a missing brick; the bricks it
+    /// read from (each run of samples in one brick once), for the cache to pin.
+    fn march(&self, r: &mut Pending, tf: &TransferFunction, step: f32) -> (Outcome, Vec<u32>) {
+        let g = self.store.grid;
+        let n = g.samples();
+        let side = g.side() as u32;
+        let mut used = Vec::new();
+        while r.k < r.end {
+            let t = r.k as f32 * step;
+            let (cell, f) = cell_at(r.origin + r.dir * t, self.inv_spacing, self.last);
+            let b = g.index(cell.map(|c| c / g.brick)) as u32;
+            if !self.empty[b as usize] {
+                let Some(slot) = self.table.lookup(b) else { return (Outcome::Waits(b), used) };
+                if used.last() != Some(&b) {
+                    used.push(b);
+                }
+                let base = slot as usize * n;
+                let l = cell.map(|c| c % g.brick);
+                let v = interpolate(f, |dx, dy, dz| {
+                    self.pool.get(base + (l[0] + dx + side * (l[1] + dy + side * (l[2] + dz))) as usize)
+                });
+                r.samples += 1;
+                if !blend(&mut r.rgb, &mut r.transmittance, tf.eval(v)) {
+                    return (Outcome::Done, used);
+                }
+            }
+            r.k += 1;
+        }
+        (Outcome::Done, used)
+    }
+
+    /// Reads `loads` (slot, virtual brick; by slot) into their slots of the pool, in parallel.
+    fn load(&mut self, loads: &[(Slot, u32)]) -> Result<(), SceneError> {
+        let n = self.store.grid.samples();
+        let store = &self.store;
+        let read = |b: u32, out: &mut Samples| store.read_brick(b as usize, &mut Vec::new(), out);
+        macro_rules! fill {
+            ($pool:expr, $variant:ident) => {{
+                let mut slots: Vec<(usize, &mut [_])> = $pool.chunks_mut(n).enumerate().collect();
+                slots.retain(|(s, _)| loads.binary_search_by_key(&(*s as Slot), |l| l.0).is_ok());
+                slots.into_par_iter().try_for_each_init(
+                    || Samples::$variant(Vec::new()),
+                    |brick, (s, dst)| {
+                        let b = loads[loads.binary_search_by_key(&(s as Slot), |l| l.0).expect("listed")].1;
+                        read(b, brick)?;
+                        let Samples::$variant(src) = brick else { unreachable!("the store's type") };
+                        dst.copy_from_slice(src);
+                        Ok(())
+                    },
+                )
+            }};
+        }
+        match &mut self.pool {
+            Samples::U8(pool) => fill!(pool, U8),
+            Samples::U16(pool) => fill!(pool, U16),
+            Samples::F32(pool) => fill!(pool, F32),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::page_table::{Flat, Hashed, MultiLevel};
+    use super::*;
+    use crate::volume::{dense::Dense, render};
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("accel-bench-ooc-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir.join("v.bricks")
+    }
+
+    /// The dense marcher's image bit for bit, with every page table and eviction policy, from a
+    /// cache of one brick (every round loads one) to one that holds the whole volume.
+    #[test]
+    fn images_equal_the_dense_marchers_whatever_the_cache() {
+        for (name, brick) in [("marschner-lobb@33", 8), ("particles@40:30", 4)] {
+            let volume = scenes::load_volume(name, 1 << 30).expect("volume");
+            let path = temp(&name.replace(['@', ':'], "-"));
+            let grid = scenes::volume::store::write_volume(&path, &volume, brick).expect("written");
+            let (lo, hi) = super::super::super::Sampler::new(&volume).domain();
+            let (v_lo, v_hi) = volume.value_range();
+            let tf = TransferFunction::ramp_above(v_lo + 0.4 * (v_hi - v_lo), v_hi, 0.3);
+            let spec = scenes::CameraSpec::canonical(scenes::Aabb { min: lo, max: hi });
+            let camera = Camera::new(spec, 24, 20);
+            let step = 0.7;
+            let oracle = render(&Dense, &volume, &tf, &camera, step);
+            let bits = |img: &VolumeImage| img.rgba.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+            assert!(oracle.rgba.iter().any(|p| p[3] > 0.0), "{name}: the view sees something");
+            for slots in [1, 3, grid.count()] {
+                for policy in [Eviction::Lru, Eviction::Clock] {
+                    let tables = [
+                        run(&path, Flat::new(grid.count()), slots, policy, &camera, &tf, step),
+                        run(&path, MultiLevel::new(grid.bricks), slots, policy, &camera, &tf, step),
+                        run(&path, Hashed::new(), slots, policy, &camera, &tf, step),
+                    ];
+                    for (t, (rgba, stats)) in tables.into_iter().enumerate() {
+                        let img = VolumeImage { rgba, ..oracle.clone() };
+                        assert!(
+                            bits(&img) == bits(&oracle),
+                            "{name}: {slots} slots, {policy:?}, table {t}: pixels differ"
+                        );
+                        assert!(
+                            stats.loads >= stats.working_set,
+                            "{name}: a cold cache loads each brick used: {stats:?}"
+                        );
+                        if slots == 1 {
+                            assert!(
+                                stats.loads <= u64::from(stats.rounds),
+                                "{name}: one slot, one load a round: {stats:?}"
+                            );
+                        }
+                        if slots == grid.count() {
+                            assert_eq!(stats.evictions, 0, "{name}: a cache of the whole volume evicts nothing");
+                            assert_eq!(stats.loads, stats.working_set, "{name}: each brick loaded once");
+                        }
+                    }
+                }
+            }
+            std::fs::remove_dir_all(path.parent().expect("dir")).ok();
+        }
+    }
+
+    fn run<T: PageTable + Sync>(
+        path: &std::path::Path,
+        table: T,
+        slots: usize,
+        policy: Eviction,
+        camera: &Camera,
+        tf: &TransferFunction,
+        step: f32,
+    ) -> (Vec<[f32; 4]>, FrameStats) {
+        let mut v = OocVolume::new(BrickStore::open(path).expect("store"), table, slots, policy);
+        v.set_transfer_function(tf);
+        let (img, stats) = v.render(camera, tf, step).expect("rendered");
+        (img.rgba, stats)
+    }
+}
