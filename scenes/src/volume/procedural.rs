@@ -59,12 +59,45 @@ const PARTICLE_REACH: f32 = 3.0;
 /// The seed of the particle field (fixed: the same name always gives the same volume).
 const PARTICLE_SEED: u64 = 0x9a27_1c1e;
 
-/// A sparse particle field (seed 003's scale test): `count` Gaussian blobs of σ = 2.5 voxels at
-/// random places of an `n³` box, their densities summed and stored as `u8` (0–255), so that a
-/// 2048³ field takes 8 GiB and the occupancy follows the count. Deterministic: the same `n` and
-/// `count` give the same samples.
+/// The blobs of a particle field: `count` Gaussian blobs of σ = 2.5 voxels at random places of
+/// an `n³` box, each added (saturating) to the voxels within 3σ of its centre, in `u8`.
+/// Deterministic: the same `n` and `count` give the same blobs. What [`particles`] samples whole
+/// and an out-of-core source samples brick by brick, with the same arithmetic.
+#[derive(Clone, Debug)]
+pub struct ParticleField {
+    pub n: u32,
+    pub centres: Vec<[f32; 3]>,
+}
+
+impl ParticleField {
+    pub fn new(n: u32, count: u32) -> Self {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(PARTICLE_SEED);
+        let centres = (0..count).map(|_| std::array::from_fn(|_| rng.random_range(0.0..(n - 1) as f32))).collect();
+        Self { n, centres }
+    }
+
+    /// The voxels blob `c` adds to: the box from its first to its last voxel per axis (inclusive),
+    /// clamped into the field.
+    pub fn reach(&self, c: &[f32; 3]) -> ([u32; 3], [u32; 3]) {
+        let reach = PARTICLE_SIGMA * PARTICLE_REACH;
+        let lo = c.map(|x| (x - reach).ceil().max(0.0) as u32);
+        let hi = c.map(|x| ((x + reach).floor() as u32).min(self.n - 1));
+        (lo, hi)
+    }
+
+    /// What blob `c` adds to voxel `v` (inside its [`Self::reach`]).
+    #[inline]
+    pub fn add(c: &[f32; 3], v: [u32; 3]) -> u8 {
+        let inv_two_var = 1.0 / (2.0 * PARTICLE_SIGMA * PARTICLE_SIGMA);
+        let d2 = v.iter().zip(c).map(|(&i, &ci)| (i as f32 - ci).powi(2)).sum::<f32>();
+        (255.0 * (-d2 * inv_two_var).exp()).round() as u8
+    }
+}
+
+/// A sparse particle field (seed 003's scale test, [`ParticleField`]) sampled whole, so that a
+/// 2048³ field takes 8 GiB and the occupancy follows the count.
 pub fn particles(n: u32, count: u32, max_bytes: u64) -> Result<Volume, SceneError> {
-    use rand::{Rng, SeedableRng};
     let name = format!("particles@{n}:{count}");
     if n < 2 {
         return Err(SceneError::UnknownScene { name, detail: "the field needs at least 2 samples per axis".into() });
@@ -72,23 +105,16 @@ pub fn particles(n: u32, count: u32, max_bytes: u64) -> Result<Volume, SceneErro
     if volume_bytes([u64::from(n); 3], 1).is_none_or(|b| b > max_bytes) {
         return Err(SceneError::TooLarge { path: name, what: format!("{n}³ u8 samples"), limit: max_bytes });
     }
-    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(PARTICLE_SEED);
-    let centres: Vec<[f32; 3]> =
-        (0..count).map(|_| std::array::from_fn(|_| rng.random_range(0.0..(n - 1) as f32))).collect();
+    let field = ParticleField::new(n, count);
     let side = n as usize;
     let mut density = vec![0u8; side * side * side];
-    let reach = PARTICLE_SIGMA * PARTICLE_REACH;
-    let inv_two_var = 1.0 / (2.0 * PARTICLE_SIGMA * PARTICLE_SIGMA);
-    for c in &centres {
-        let lo = c.map(|x| (x - reach).ceil().max(0.0) as usize);
-        let hi = c.map(|x| ((x + reach).floor() as usize).min(side - 1));
+    for c in &field.centres {
+        let (lo, hi) = field.reach(c);
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
-                    let d2 = [x, y, z].iter().zip(c).map(|(&i, &ci)| (i as f32 - ci).powi(2)).sum::<f32>();
-                    let add = (255.0 * (-d2 * inv_two_var).exp()).round() as u8;
-                    let v = &mut density[x + side * (y + side * z)];
-                    *v = v.saturating_add(add);
+                    let v = &mut density[x as usize + side * (y as usize + side * z as usize)];
+                    *v = v.saturating_add(ParticleField::add(c, [x, y, z]));
                 }
             }
         }

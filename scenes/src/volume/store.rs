@@ -399,6 +399,129 @@ impl BrickStore {
     }
 }
 
+/// Where an out-of-core volume's bricks come from: a store on disk ([`BrickStore`]) or a field
+/// generated brick by brick ([`ParticleBricks`]), each brick's `(B + 1)³` samples as
+/// [`BrickGrid::sample_of`] lays them out.
+pub trait BrickSource: Sync {
+    fn kind(&self) -> SampleKind;
+    fn spacing(&self) -> [f32; 3];
+    fn grid(&self) -> BrickGrid;
+    /// A range holding every sample of brick `i` (NaN for a brick of NaN samples): exact for a
+    /// store, perhaps wider for a generated field; what transfer-function emptiness is judged by.
+    fn range(&self, i: usize) -> (f32, f32);
+    /// Bytes loading brick `i` reads (or generates); 0 for a brick of one value.
+    fn cost(&self, i: usize) -> u64;
+    /// Brick `i`'s samples into `out` (resized to the source's type and size).
+    fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError>;
+}
+
+impl BrickSource for BrickStore {
+    fn kind(&self) -> SampleKind {
+        self.kind
+    }
+    fn spacing(&self) -> [f32; 3] {
+        self.spacing
+    }
+    fn grid(&self) -> BrickGrid {
+        self.grid
+    }
+    fn range(&self, i: usize) -> (f32, f32) {
+        (self.entries[i].min, self.entries[i].max)
+    }
+    fn cost(&self, i: usize) -> u64 {
+        u64::from(self.entries[i].bytes)
+    }
+    fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
+        BrickStore::read_brick(self, i, &mut Vec::new(), out)
+    }
+}
+
+/// A particle field ([`super::procedural::ParticleField`]) sampled brick by brick when a brick is
+/// asked for, with the whole field's arithmetic: an 8192³ field (512 GiB of `u8`) never exists
+/// whole, in memory or on disk. Each brick knows the blobs that reach its samples (a sorted list
+/// of (brick, blob) pairs); a brick no blob reaches is all zeros, any other is given the range
+/// `[0, 255]`.
+#[derive(Clone, Debug)]
+pub struct ParticleBricks {
+    field: super::procedural::ParticleField,
+    grid: BrickGrid,
+    /// (brick, blob) for every blob whose reach meets the brick's samples, sorted.
+    reaches: Vec<(u32, u32)>,
+}
+
+impl ParticleBricks {
+    /// `particles@n:count` in bricks of `brick³` cells; `None` where that is no brick layout.
+    pub fn new(n: u32, count: u32, brick: u32) -> Option<Self> {
+        let grid = BrickGrid::new([n; 3], brick)?;
+        let field = super::procedural::ParticleField::new(n, count);
+        let mut reaches = Vec::new();
+        for (k, c) in field.centres.iter().enumerate() {
+            let (lo, hi) = field.reach(c);
+            // A brick's samples run from b·B to b·B + B: a voxel v is in bricks (v − 1)/B ..= v/B.
+            let first = lo.map(|v| v.saturating_sub(1) / brick);
+            let last = std::array::from_fn::<u32, 3, _>(|a| (hi[a] / brick).min(grid.bricks[a] - 1));
+            for z in first[2]..=last[2] {
+                for y in first[1]..=last[1] {
+                    for x in first[0]..=last[0] {
+                        reaches.push((grid.index([x, y, z]) as u32, k as u32));
+                    }
+                }
+            }
+        }
+        reaches.sort_unstable();
+        Some(Self { field, grid, reaches })
+    }
+
+    fn blobs(&self, i: usize) -> &[(u32, u32)] {
+        let i = i as u32;
+        let start = self.reaches.partition_point(|&(b, _)| b < i);
+        let end = self.reaches.partition_point(|&(b, _)| b <= i);
+        &self.reaches[start..end]
+    }
+}
+
+impl BrickSource for ParticleBricks {
+    fn kind(&self) -> SampleKind {
+        SampleKind::U8
+    }
+    fn spacing(&self) -> [f32; 3] {
+        [1.0; 3]
+    }
+    fn grid(&self) -> BrickGrid {
+        self.grid
+    }
+    fn range(&self, i: usize) -> (f32, f32) {
+        if self.blobs(i).is_empty() { (0.0, 0.0) } else { (0.0, 255.0) }
+    }
+    fn cost(&self, i: usize) -> u64 {
+        if self.blobs(i).is_empty() { 0 } else { self.grid.samples() as u64 }
+    }
+    fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
+        let g = self.grid;
+        if !matches!(out, Samples::U8(v) if v.len() == g.samples()) {
+            *out = SampleKind::U8.zeros(g.samples());
+        }
+        let Samples::U8(v) = out else { unreachable!("made u8 above") };
+        v.fill(0);
+        let b = g.brick(i);
+        let side = g.side() as u32;
+        for &(_, k) in self.blobs(i) {
+            let c = &self.field.centres[k as usize];
+            let (lo, hi) = self.field.reach(c);
+            // The brick's samples this blob reaches; a clamped sample (past the far face) repeats
+            // the last voxel, so it takes what that voxel takes.
+            for (s, dst) in v.iter_mut().enumerate() {
+                let s = s as u32;
+                let at = g.sample_of(b, [s % side, s / side % side, s / (side * side)]);
+                if (0..3).all(|a| lo[a] <= at[a] && at[a] <= hi[a]) {
+                    *dst = dst.saturating_add(super::procedural::ParticleField::add(c, at));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -493,6 +616,33 @@ mod tests {
         let err = with(b"not a store at all, but long enough to hold a header......").expect_err("magic").to_string();
         assert!(err.contains("not a brick store"), "{err}");
         std::fs::remove_dir_all(path.parent().expect("dir")).ok();
+    }
+
+    /// Generated brick by brick, a particle field's bricks are the whole field's, sample for
+    /// sample, apron and clamped far faces included; bricks no blob reaches say they are zero.
+    #[test]
+    fn particle_bricks_are_the_whole_fields_bricks() {
+        for (n, count, brick) in [(40, 30, 4), (37, 12, 8), (20, 200, 16)] {
+            let whole = super::super::procedural::particles(n, count, 1 << 30).expect("field");
+            let path = temp(&format!("particles-{n}-{brick}"));
+            write_volume(&path, &whole, brick).expect("written");
+            let store = BrickStore::open(&path).expect("opened");
+            let generated = ParticleBricks::new(n, count, brick).expect("layout");
+            assert_eq!(generated.grid(), store.grid);
+            let (mut a, mut b) = (Samples::U8(Vec::new()), Samples::U8(Vec::new()));
+            let mut zero = 0;
+            for i in 0..store.grid.count() {
+                BrickSource::read_brick(&store, i, &mut a).expect("stored");
+                generated.read_brick(i, &mut b).expect("generated");
+                assert_eq!(a, b, "particles@{n}:{count}, brick {:?} of {brick}³", store.grid.brick(i));
+                let (lo, hi) = generated.range(i);
+                let (s_lo, s_hi) = store.range(i);
+                assert!(lo <= s_lo && s_hi <= hi, "brick {i}: [{s_lo}, {s_hi}] outside [{lo}, {hi}]");
+                zero += usize::from(hi == 0.0);
+            }
+            assert!(zero > 0 || count > 100, "particles@{n}:{count}: some brick is empty");
+            std::fs::remove_dir_all(path.parent().expect("dir")).ok();
+        }
     }
 
     #[test]

@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
-use scenes::volume::store::BrickStore;
+use scenes::volume::store::{BrickGrid, BrickSource};
 use scenes::{Camera, Samples, SceneError};
 
 use super::cache::{Allocation, Eviction, SlotCache};
@@ -27,7 +27,7 @@ use crate::volume::{TransferFunction, VolumeImage, blend, cell_at, interpolate, 
 pub struct FrameStats {
     /// March-and-load rounds until no ray waited.
     pub rounds: u32,
-    /// Bricks read from the store (constant bricks are filled, not read).
+    /// Bricks loaded (constant bricks are filled, not read), and the bytes read or generated.
     pub loads: u64,
     pub bytes_read: u64,
     /// Translations that found the brick resident, and that did not (a ray then waited).
@@ -38,9 +38,11 @@ pub struct FrameStats {
     pub working_set: u64,
 }
 
-/// A volume in a brick store, cast through a fixed-size brick cache.
-pub struct OocVolume<T: PageTable> {
-    store: BrickStore,
+/// A volume from a brick source (a store on disk, a generated field), cast through a fixed-size
+/// brick cache.
+pub struct OocVolume<S: BrickSource, T: PageTable> {
+    source: S,
+    grid: BrickGrid,
     table: T,
     cache: SlotCache,
     /// The resident bricks' samples, slot after slot.
@@ -71,17 +73,18 @@ enum Outcome {
     Waits(u32),
 }
 
-impl<T: PageTable + Sync> OocVolume<T> {
-    /// The store's volume through `table` and a cache of `slots` bricks evicted by `policy`.
-    pub fn new(store: BrickStore, table: T, slots: usize, policy: Eviction) -> Self {
+impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
+    /// The source's volume through `table` and a cache of `slots` bricks evicted by `policy`.
+    pub fn new(source: S, table: T, slots: usize, policy: Eviction) -> Self {
         let cache = SlotCache::new(slots, policy);
-        let pool = store.kind.zeros(cache.slots() * store.grid.samples());
-        let g = store.grid;
+        let g = source.grid();
+        let pool = source.kind().zeros(cache.slots() * g.samples());
         Self {
-            inv_spacing: store.spacing.map(|s| 1.0 / s),
+            inv_spacing: source.spacing().map(|s| 1.0 / s),
             last: g.dims.map(|d| d - 1),
             empty: vec![false; g.count()],
-            store,
+            grid: g,
+            source,
             table,
             cache,
             pool,
@@ -91,8 +94,8 @@ impl<T: PageTable + Sync> OocVolume<T> {
     /// Bricks that `tf` makes wholly transparent are skipped without being read.
     pub fn set_transfer_function(&mut self, tf: &TransferFunction) {
         for (i, e) in self.empty.iter_mut().enumerate() {
-            let entry = self.store.entry(i);
-            *e = !entry.min.is_nan() && tf.is_empty_over(entry.min, entry.max);
+            let (min, max) = self.source.range(i);
+            *e = !min.is_nan() && tf.is_empty_over(min, max);
         }
     }
 
@@ -109,7 +112,8 @@ impl<T: PageTable + Sync> OocVolume<T> {
         step: f32,
     ) -> Result<(VolumeImage, FrameStats), SceneError> {
         let (w, h) = (camera.width, camera.height);
-        let hi = Vec3::from_array(std::array::from_fn(|a| self.last[a] as f32 * self.store.spacing[a]));
+        let spacing = self.source.spacing();
+        let hi = Vec3::from_array(std::array::from_fn(|a| self.last[a] as f32 * spacing[a]));
         let mut rgba = vec![[0.0, 0.0, 0.0, 0.0]; (w * h) as usize];
         let mut rays: Vec<Pending> = (0..w * h)
             .filter_map(|i| {
@@ -178,7 +182,7 @@ impl<T: PageTable + Sync> OocVolume<T> {
             }
             loads.sort_unstable();
             stats.loads += loads.len() as u64;
-            stats.bytes_read += loads.iter().map(|&(_, b)| u64::from(self.store.entry(b as usize).bytes)).sum::<u64>();
+            stats.bytes_read += loads.iter().map(|&(_, b)| self.source.cost(b as usize)).sum::<u64>();
             self.load(&loads)?;
         }
         stats.hits = self.cache.hits - hits0;
@@ -191,7 +195,7 @@ impl<T: PageTable + Sync> OocVolume<T> {
     /// Marches `r` from its next sample until it ends or needs a missing brick; the bricks it
     /// read from (each run of samples in one brick once), for the cache to pin.
     fn march(&self, r: &mut Pending, tf: &TransferFunction, step: f32) -> (Outcome, Vec<u32>) {
-        let g = self.store.grid;
+        let g = self.grid;
         let n = g.samples();
         let side = g.side() as u32;
         let mut used = Vec::new();
@@ -221,9 +225,9 @@ impl<T: PageTable + Sync> OocVolume<T> {
 
     /// Reads `loads` (slot, virtual brick; by slot) into their slots of the pool, in parallel.
     fn load(&mut self, loads: &[(Slot, u32)]) -> Result<(), SceneError> {
-        let n = self.store.grid.samples();
-        let store = &self.store;
-        let read = |b: u32, out: &mut Samples| store.read_brick(b as usize, &mut Vec::new(), out);
+        let n = self.grid.samples();
+        let source = &self.source;
+        let read = |b: u32, out: &mut Samples| source.read_brick(b as usize, out);
         macro_rules! fill {
             ($pool:expr, $variant:ident) => {{
                 let mut slots: Vec<(usize, &mut [_])> = $pool.chunks_mut(n).enumerate().collect();
@@ -251,6 +255,8 @@ impl<T: PageTable + Sync> OocVolume<T> {
 #[cfg(test)]
 mod tests {
     use super::super::page_table::{Flat, Hashed, MultiLevel};
+    use scenes::volume::store::BrickStore;
+
     use super::*;
     use crate::volume::{dense::Dense, render};
 
@@ -309,6 +315,26 @@ mod tests {
             }
             std::fs::remove_dir_all(path.parent().expect("dir")).ok();
         }
+    }
+
+    /// A field generated brick by brick on demand renders as the whole field does.
+    #[test]
+    fn a_generated_field_renders_as_the_whole_field() {
+        let (n, count) = (48, 40);
+        let volume = scenes::volume::procedural::particles(n, count, 1 << 30).expect("field");
+        let (lo, hi) = super::super::super::Sampler::new(&volume).domain();
+        let tf = TransferFunction::ramp_above(20.0, 255.0, 0.4);
+        let camera = Camera::new(scenes::CameraSpec::canonical(scenes::Aabb { min: lo, max: hi }), 20, 16);
+        let oracle = render(&Dense, &volume, &tf, &camera, 0.6);
+        assert!(oracle.rgba.iter().any(|p| p[3] > 0.0), "the view sees a blob");
+        let source = scenes::volume::store::ParticleBricks::new(n, count, 8).expect("layout");
+        let bricks = source.grid().count();
+        let mut v = OocVolume::new(source, Hashed::new(), 4, Eviction::Clock);
+        v.set_transfer_function(&tf);
+        let (img, stats) = v.render(&camera, &tf, 0.6).expect("rendered");
+        let bits = |rgba: &[[f32; 4]]| rgba.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&img.rgba) == bits(&oracle.rgba), "pixels differ");
+        assert!(stats.working_set < bricks as u64, "empty bricks are skipped: {stats:?} of {bricks}");
     }
 
     fn run<T: PageTable + Sync>(
