@@ -5,9 +5,11 @@
 //!
 //! ```sh
 //! cargo run --release --example ooc -p harness -- 2048 4000 32 512 256 8
+//! cargo run --release --example ooc -p harness -- 2048 4000 32 512 256 8 /data/field.bricks
 //! ```
 //!
-//! Arguments: field side N, blob count, brick side, cache MiB, image side, frames.
+//! Arguments: field side N, blob count, brick side, cache MiB, image side, frames; and, to cast a
+//! file-backed volume instead, a path where the field is first written as a brick store.
 
 use std::time::Instant;
 
@@ -16,11 +18,13 @@ use kernels::volume::TransferFunction;
 use kernels::volume::ooc::cache::Eviction;
 use kernels::volume::ooc::march::OocVolume;
 use kernels::volume::ooc::page_table::{Flat, Hashed, MultiLevel, PageTable};
-use scenes::volume::store::{BrickSource, ParticleBricks};
+use scenes::volume::store::{BrickSource, BrickStore, ParticleBricks};
 use scenes::{Camera, CameraSpec};
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<u64> = std::env::args().skip(1).map(|a| a.parse()).collect::<Result<_, _>>()?;
+    let all: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<u64> = all.iter().take(6).map(|a| a.parse()).collect::<Result<_, _>>()?;
+    let store = all.get(6).map(std::path::PathBuf::from);
     let arg = |i: usize, default: u64| args.get(i).copied().unwrap_or(default);
     let (n, count, brick) = (arg(0, 1024) as u32, arg(1, 2000) as u32, arg(2, 32) as u32);
     let (cache_mib, size, frames) = (arg(3, 256), arg(4, 256) as u32, arg(5, 4) as u32);
@@ -36,6 +40,26 @@ fn main() -> anyhow::Result<()> {
         t.elapsed().as_secs_f64() * 1e3
     );
     let tf = TransferFunction::ramp_above(40.0, 255.0, 0.5);
+    if let Some(path) = &store {
+        let t = Instant::now();
+        scenes::volume::store::write_source(path, &source)?;
+        let bytes = std::fs::metadata(path)?.len();
+        println!(
+            "written to {}: {:.2} GiB in {:.1} s; cast from the file",
+            path.display(),
+            bytes as f64 / f64::from(1u32 << 30),
+            t.elapsed().as_secs_f64()
+        );
+        for table in ["flat", "multi-level", "hash"] {
+            let file = BrickStore::open(path)?;
+            match table {
+                "flat" => run(file, Flat::new(grid.count()), slots, &tf, n, size, frames),
+                "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, n, size, frames),
+                _ => run(file, Hashed::new(), slots, &tf, n, size, frames),
+            }?;
+        }
+        return Ok(());
+    }
     for table in ["flat", "multi-level", "hash"] {
         let source = ParticleBricks::new(n, count, brick).expect("as above");
         match table {
@@ -47,8 +71,8 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-fn run<T: PageTable + Sync>(
-    source: ParticleBricks,
+fn run<S: BrickSource, T: PageTable + Sync>(
+    source: S,
     table: T,
     slots: usize,
     tf: &TransferFunction,

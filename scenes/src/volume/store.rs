@@ -158,14 +158,14 @@ impl BrickEntry {
 
 /// Writes a store of `dims` samples of `kind` at `spacing` to `path`, `brick³` cells a brick,
 /// each brick's `(B + 1)³` samples (x fastest, [`BrickGrid::sample_of`]) filled by `fill` in turn
-/// — one brick in memory at a time. Returns the store's layout.
+/// — one brick in memory at a time; an error from `fill` ends the write. Returns the layout.
 pub fn write_store(
     path: &Path,
     kind: SampleKind,
     dims: [u32; 3],
     spacing: [f32; 3],
     brick: u32,
-    mut fill: impl FnMut([u32; 3], &mut Samples),
+    mut fill: impl FnMut([u32; 3], &mut Samples) -> Result<(), SceneError>,
 ) -> Result<BrickGrid, SceneError> {
     let name = path.display().to_string();
     let io = |source| SceneError::Io { path: name.clone(), source };
@@ -185,7 +185,7 @@ pub fn write_store(
     let mut entries = Vec::with_capacity(grid.count());
     let mut offset = HEADER_BYTES;
     for i in 0..grid.count() {
-        fill(grid.brick(i), &mut samples);
+        fill(grid.brick(i), &mut samples)?;
         let (min, max) = range(&samples);
         // A brick of one value stores none (a NaN sample is never equal: such a brick is stored).
         let constant = min == max && (0..samples.len()).all(|k| samples.get(k).to_bits() == min.to_bits());
@@ -227,7 +227,7 @@ pub fn write_volume(path: &Path, volume: &Volume, brick: u32) -> Result<BrickGri
     let grid = BrickGrid::new(volume.dims, brick);
     let [dx, dy, _] = volume.dims.map(|d| d as usize);
     write_store(path, kind, volume.dims, volume.spacing, brick, |b, out| {
-        let Some(grid) = grid else { return };
+        let Some(grid) = grid else { return Ok(()) };
         let side = grid.side();
         for k in 0..grid.samples() {
             let local = [(k % side) as u32, (k / side % side) as u32, (k / (side * side)) as u32];
@@ -240,6 +240,16 @@ pub fn write_volume(path: &Path, volume: &Volume, brick: u32) -> Result<BrickGri
                 _ => unreachable!("the store's type is the volume's"),
             }
         }
+        Ok(())
+    })
+}
+
+/// Writes `source`'s bricks as a store at `path`, one brick in memory at a time (a generated
+/// field onto disk, to be read back as a file-backed volume).
+pub fn write_source(path: &Path, source: &impl BrickSource) -> Result<BrickGrid, SceneError> {
+    let grid = source.grid();
+    write_store(path, source.kind(), grid.dims, source.spacing(), grid.brick, |b, out| {
+        source.read_brick(grid.index(b), out)
     })
 }
 
@@ -504,17 +514,29 @@ impl BrickSource for ParticleBricks {
         let Samples::U8(v) = out else { unreachable!("made u8 above") };
         v.fill(0);
         let b = g.brick(i);
-        let side = g.side() as u32;
+        let side = g.side();
+        // Per axis, the lattice sample each of the brick's samples stands for.
+        let at: [Vec<u32>; 3] = std::array::from_fn(|a| (0..side as u32).map(|l| g.sample_of(b, [l; 3])[a]).collect());
         for &(_, k) in self.blobs(i) {
             let c = &self.field.centres[k as usize];
             let (lo, hi) = self.field.reach(c);
-            // The brick's samples this blob reaches; a clamped sample (past the far face) repeats
-            // the last voxel, so it takes what that voxel takes.
-            for (s, dst) in v.iter_mut().enumerate() {
-                let s = s as u32;
-                let at = g.sample_of(b, [s % side, s / side % side, s / (side * side)]);
-                if (0..3).all(|a| lo[a] <= at[a] && at[a] <= hi[a]) {
-                    *dst = dst.saturating_add(super::procedural::ParticleField::add(c, at));
+            // The brick's samples this blob reaches, per axis a run (the samples' lattice
+            // coordinates never decrease; a clamped one past the far face repeats the last voxel,
+            // so it takes what that voxel takes).
+            let run = |a: usize| {
+                let first = at[a].partition_point(|&s| s < lo[a]);
+                let end = at[a].partition_point(|&s| s <= hi[a]);
+                first..end
+            };
+            let (xs, ys, zs) = (run(0), run(1), run(2));
+            for z in zs {
+                for y in ys.clone() {
+                    let row = side * (y + side * z);
+                    for x in xs.clone() {
+                        let dst = &mut v[row + x];
+                        *dst = dst
+                            .saturating_add(super::procedural::ParticleField::add(c, [at[0][x], at[1][y], at[2][z]]));
+                    }
                 }
             }
         }
@@ -641,6 +663,10 @@ mod tests {
                 zero += usize::from(hi == 0.0);
             }
             assert!(zero > 0 || count > 100, "particles@{n}:{count}: some brick is empty");
+            // Written from the generator, the store is the whole field's store byte for byte.
+            let from_source = path.with_extension("generated");
+            write_source(&from_source, &generated).expect("written from the generator");
+            assert!(std::fs::read(&from_source).expect("bytes") == std::fs::read(&path).expect("bytes"));
             std::fs::remove_dir_all(path.parent().expect("dir")).ok();
         }
     }
