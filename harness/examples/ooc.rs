@@ -60,6 +60,9 @@ fn main() -> anyhow::Result<()> {
         }
         return Ok(());
     }
+    if n <= 1024 {
+        in_core(n, count, brick, &tf, size)?;
+    }
     for table in ["flat", "multi-level", "hash"] {
         let source = ParticleBricks::new(n, count, brick).expect("as above");
         match table {
@@ -69,6 +72,63 @@ fn main() -> anyhow::Result<()> {
         }?;
     }
     Ok(())
+}
+
+/// The translation's cost: the same frame in core — the dense marcher and the `vdb` volume
+/// structure over the whole field — and out of core with every brick resident (its second
+/// frame), per sample taken, so that only the translation and the brick reads differ.
+fn in_core(n: u32, count: u32, brick: u32, tf: &TransferFunction, size: u32) -> anyhow::Result<()> {
+    use kernels::volume::{dense::Dense, ntree::NTree, render};
+    let volume = scenes::volume::procedural::particles(n, count, 1 << 34)?;
+    let centre = Vec3::splat((n - 1) as f32 * 0.5);
+    let eye = centre + Vec3::new(1.0, 0.35, 0.0) * n as f32 * 1.4;
+    let camera = Camera::new(CameraSpec { eye, target: centre, up: Vec3::Y, vfov_deg: 45.0 }, size, size);
+    let per_sample = |ms: f64, samples: u64| ms * 1e6 / samples.max(1) as f64;
+    let time = |f: &dyn Fn() -> u64| {
+        f();
+        let t = Instant::now();
+        let samples = f();
+        (t.elapsed().as_secs_f64() * 1e3, samples)
+    };
+    let (ms, s) = time(&|| render(&Dense, &volume, tf, &camera, 1.0).samples);
+    println!("  in core: dense {ms:.0} ms, {:.1} ns a sample ({s} samples)", per_sample(ms, s));
+    let vdb = NTree::vdb(&volume, tf);
+    let (ms, s) = time(&|| render(&vdb, &volume, tf, &camera, 1.0).samples);
+    println!("  in core: vdb {ms:.0} ms, {:.1} ns a sample ({s} samples)", per_sample(ms, s));
+    let all = ParticleBricks::new(n, count, brick).expect("a layout").grid().count();
+    for table in ["flat", "multi-level", "hash"] {
+        let source = ParticleBricks::new(n, count, brick).expect("a layout");
+        let (ms, s) = match table {
+            "flat" => warm(source, Flat::new(all), all, tf, &camera)?,
+            "multi-level" => warm(source, MultiLevel::new(source_bricks(n, brick)), all, tf, &camera)?,
+            _ => warm(source, Hashed::new(), all, tf, &camera)?,
+        };
+        println!(
+            "  out of core, all resident, {table}: {ms:.0} ms, {:.1} ns a sample ({s} samples)",
+            per_sample(ms, s)
+        );
+    }
+    Ok(())
+}
+
+fn source_bricks(n: u32, brick: u32) -> [u32; 3] {
+    ParticleBricks::new(n, 0, brick).expect("a layout").grid().bricks
+}
+
+/// A frame's time and samples with every brick the frame needs already resident.
+fn warm<S: BrickSource, T: PageTable + Sync>(
+    source: S,
+    table: T,
+    slots: usize,
+    tf: &TransferFunction,
+    camera: &Camera,
+) -> anyhow::Result<(f64, u64)> {
+    let mut v = OocVolume::new(source, table, slots, Eviction::Clock);
+    v.set_transfer_function(tf);
+    v.render(camera, tf, 1.0)?;
+    let t = Instant::now();
+    let (img, _) = v.render(camera, tf, 1.0)?;
+    Ok((t.elapsed().as_secs_f64() * 1e3, img.samples))
 }
 
 fn run<S: BrickSource, T: PageTable + Sync>(
