@@ -17,9 +17,12 @@ use glam::Vec3;
 use kernels::volume::TransferFunction;
 use kernels::volume::ooc::cache::Eviction;
 use kernels::volume::ooc::march::OocVolume;
-use kernels::volume::ooc::page_table::{Flat, Hashed, MultiLevel, PageTable};
+use kernels::volume::ooc::page_table::{Flat, Hashed, MultiLevel, PageTable, Tree64};
 use scenes::volume::store::{BrickSource, BrickStore, ParticleBricks};
 use scenes::{Camera, CameraSpec};
+
+/// The page tables compared.
+const TABLES: [&str; 4] = ["flat", "multi-level", "64-tree", "hash"];
 
 fn main() -> anyhow::Result<()> {
     let all: Vec<String> = std::env::args().skip(1).collect();
@@ -50,11 +53,12 @@ fn main() -> anyhow::Result<()> {
             bytes as f64 / f64::from(1u32 << 30),
             t.elapsed().as_secs_f64()
         );
-        for table in ["flat", "multi-level", "hash"] {
+        for table in TABLES {
             let file = BrickStore::open(path)?;
             match table {
                 "flat" => run(file, Flat::new(grid.count()), slots, &tf, n, size, frames),
                 "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, n, size, frames),
+                "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, n, size, frames),
                 _ => run(file, Hashed::new(), slots, &tf, n, size, frames),
             }?;
         }
@@ -63,11 +67,12 @@ fn main() -> anyhow::Result<()> {
     if n <= 1024 {
         in_core(n, count, brick, &tf, size)?;
     }
-    for table in ["flat", "multi-level", "hash"] {
+    for table in TABLES {
         let source = ParticleBricks::new(n, count, brick).expect("as above");
         match table {
             "flat" => run(source, Flat::new(grid.count()), slots, &tf, n, size, frames),
             "multi-level" => run(source, MultiLevel::new(grid.bricks), slots, &tf, n, size, frames),
+            "64-tree" => run(source, Tree64::new(grid.bricks), slots, &tf, n, size, frames),
             _ => run(source, Hashed::new(), slots, &tf, n, size, frames),
         }?;
     }
@@ -96,11 +101,12 @@ fn in_core(n: u32, count: u32, brick: u32, tf: &TransferFunction, size: u32) -> 
     let (ms, s) = time(&|| render(&vdb, &volume, tf, &camera, 1.0).samples);
     println!("  in core: vdb {ms:.0} ms, {:.1} ns a sample ({s} samples)", per_sample(ms, s));
     let all = ParticleBricks::new(n, count, brick).expect("a layout").grid().count();
-    for table in ["flat", "multi-level", "hash"] {
+    for table in TABLES {
         let source = ParticleBricks::new(n, count, brick).expect("a layout");
         let (ms, s) = match table {
             "flat" => warm(source, Flat::new(all), all, tf, &camera)?,
             "multi-level" => warm(source, MultiLevel::new(source_bricks(n, brick)), all, tf, &camera)?,
+            "64-tree" => warm(source, Tree64::new(source_bricks(n, brick)), all, tf, &camera)?,
             _ => warm(source, Hashed::new(), all, tf, &camera)?,
         };
         println!(

@@ -301,7 +301,7 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::page_table::{Flat, Hashed, MultiLevel};
+    use super::super::page_table::{Flat, Hashed, MultiLevel, Tree64};
     use scenes::volume::store::BrickStore;
 
     use super::*;
@@ -336,6 +336,7 @@ mod tests {
                         run(&path, Flat::new(grid.count()), slots, policy, &camera, &tf, step),
                         run(&path, MultiLevel::new(grid.bricks), slots, policy, &camera, &tf, step),
                         run(&path, Hashed::new(), slots, policy, &camera, &tf, step),
+                        run(&path, Tree64::new(grid.bricks), slots, policy, &camera, &tf, step),
                     ];
                     for (t, (rgba, stats)) in tables.into_iter().enumerate() {
                         let img = VolumeImage { rgba, ..oracle.clone() };

@@ -8,6 +8,8 @@
 //!   entries allocated while any of its bricks is resident (Hadwiger, Beyer, Jeong & Pfister,
 //!   "Interactive volume exploration of petascale microscopy data streams using a
 //!   visualization-driven virtual memory approach", 2012): two reads, size with the resident set.
+//! - [`Tree64`]: a 64-tree over the virtual bricks (`tree64`'s shape), a dense node of 64 entries
+//!   a level: a hierarchy as its own page table, one read a level, its size with the resident set.
 //! - [`Hashed`]: a hash map from virtual brick to slot (seed 003's "simple" choice; hashbrown with
 //!   foldhash), its size with the resident set, a probe sequence per translation.
 //!
@@ -172,6 +174,123 @@ impl PageTable for MultiLevel {
     }
 }
 
+/// A 64-tree over the virtual bricks (fan-out 4³ a level, as `tree64`), each node a dense table
+/// of 64 entries — a child node's index, or at the last level a slot — allocated while a brick
+/// below it is resident and given back when none is: a hierarchy as its own page table, one read
+/// a level.
+#[derive(Clone, Debug)]
+pub struct Tree64 {
+    bricks: [u32; 3],
+    /// Levels of 4³ below the root (the root's level included): 4^levels ≥ every axis.
+    levels: u32,
+    /// Nodes of 64 entries, with the count of non-absent entries in each; node 0 is the root.
+    nodes: Vec<([u32; 64], u32)>,
+    free: Vec<u32>,
+}
+
+impl Tree64 {
+    pub fn new(bricks: [u32; 3]) -> Self {
+        let mut levels = 1;
+        while bricks.iter().any(|&b| b > 1 << (2 * levels)) {
+            levels += 1;
+        }
+        Self { bricks, levels, nodes: vec![([ABSENT; 64], 0)], free: Vec::new() }
+    }
+
+    /// The brick's coordinates.
+    #[inline]
+    fn coords(&self, brick: u32) -> [u32; 3] {
+        let [nx, ny, _] = self.bricks;
+        [brick % nx, brick / nx % ny, brick / (nx * ny)]
+    }
+
+    /// The entry of level `l` (0 the root) on the path to `c`: 2 bits of each axis, x lowest.
+    #[inline]
+    fn entry(&self, c: [u32; 3], l: u32) -> usize {
+        let shift = 2 * (self.levels - 1 - l);
+        ((c[0] >> shift & 3) | (c[1] >> shift & 3) << 2 | (c[2] >> shift & 3) << 4) as usize
+    }
+}
+
+impl PageTable for Tree64 {
+    fn name(&self) -> &'static str {
+        "64-tree"
+    }
+    #[inline]
+    fn lookup(&self, brick: u32) -> Option<Slot> {
+        let c = self.coords(brick);
+        let mut node = 0usize;
+        for l in 0..self.levels {
+            let e = self.nodes[node].0[self.entry(c, l)];
+            if e == ABSENT {
+                return None;
+            }
+            if l + 1 == self.levels {
+                return Some(e);
+            }
+            node = e as usize;
+        }
+        None
+    }
+    fn map(&mut self, brick: u32, slot: Slot) {
+        let c = self.coords(brick);
+        let mut node = 0usize;
+        for l in 0..self.levels - 1 {
+            let e = self.entry(c, l);
+            if self.nodes[node].0[e] == ABSENT {
+                let child = match self.free.pop() {
+                    Some(f) => f,
+                    None => {
+                        self.nodes.push(([ABSENT; 64], 0));
+                        self.nodes.len() as u32 - 1
+                    }
+                };
+                self.nodes[node].0[e] = child;
+                self.nodes[node].1 += 1;
+            }
+            node = self.nodes[node].0[e] as usize;
+        }
+        let e = self.entry(c, self.levels - 1);
+        if self.nodes[node].0[e] == ABSENT {
+            self.nodes[node].1 += 1;
+        }
+        self.nodes[node].0[e] = slot;
+    }
+    fn unmap(&mut self, brick: u32) {
+        let c = self.coords(brick);
+        let mut path = Vec::with_capacity(self.levels as usize);
+        let mut node = 0usize;
+        for l in 0..self.levels {
+            let e = self.entry(c, l);
+            let next = self.nodes[node].0[e];
+            if next == ABSENT {
+                return;
+            }
+            path.push((node, e));
+            node = next as usize;
+        }
+        // Clear the slot, then every node the clearing left empty, from the bottom (the root stays).
+        for &(node, e) in path.iter().rev() {
+            let child = self.nodes[node].0[e];
+            self.nodes[node].0[e] = ABSENT;
+            self.nodes[node].1 -= 1;
+            if (node, e) != *path.last().expect("a path") {
+                self.free.push(child);
+            }
+            if self.nodes[node].1 > 0 || node == 0 {
+                break;
+            }
+        }
+    }
+    /// The nodes in use, 64 entries each.
+    fn bytes(&self) -> u64 {
+        ((self.nodes.len() - self.free.len()) * 64 * size_of::<u32>()) as u64
+    }
+    fn reads_per_lookup(&self) -> f64 {
+        f64::from(self.levels)
+    }
+}
+
 /// A hash map from virtual brick to slot.
 #[derive(Clone, Debug, Default)]
 pub struct Hashed {
@@ -227,8 +346,12 @@ mod tests {
     fn every_scheme_maps_every_brick_as_a_plain_map_does() {
         let bricks = [13u32, 9, 17];
         let n = bricks.iter().product::<u32>();
-        let mut tables: Vec<Box<dyn PageTable>> =
-            vec![Box::new(Flat::new(n as usize)), Box::new(MultiLevel::new(bricks)), Box::new(Hashed::new())];
+        let mut tables: Vec<Box<dyn PageTable>> = vec![
+            Box::new(Flat::new(n as usize)),
+            Box::new(MultiLevel::new(bricks)),
+            Box::new(Hashed::new()),
+            Box::new(Tree64::new(bricks)),
+        ];
         let mut plain = std::collections::HashMap::new();
         let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
         for step in 0..4000 {
@@ -255,6 +378,7 @@ mod tests {
         }
         let multi = MultiLevel::new(bricks);
         assert_eq!(tables[1].bytes(), multi.bytes(), "only the directory is left");
+        assert_eq!(tables[3].bytes(), 64 * 4, "only the 64-tree's root is left");
         assert!(tables.iter().all(|t| (0..n).all(|b| t.lookup(b).is_none())));
     }
 
