@@ -9,7 +9,9 @@
 //! ```
 //!
 //! Arguments: field side N, blob count, brick side, cache MiB, image side, frames; and, to cast a
-//! file-backed volume instead, a path where the field is first written as a brick store.
+//! file-backed volume instead, a path where the field is first written as a brick store. Or
+//! `ml N BRICK CACHE_MIB SIZE FRAMES PATH`: the dense Marschner–Lobb signal as a file-backed
+//! volume (f32; 1920³ makes a 29 GiB file).
 
 use std::time::Instant;
 
@@ -26,6 +28,9 @@ const TABLES: [&str; 4] = ["flat", "multi-level", "64-tree", "hash"];
 
 fn main() -> anyhow::Result<()> {
     let all: Vec<String> = std::env::args().skip(1).collect();
+    if all.first().map(String::as_str) == Some("ml") {
+        return marschner_lobb(&all[1..]);
+    }
     let args: Vec<u64> = all.iter().take(6).map(|a| a.parse()).collect::<Result<_, _>>()?;
     let store = all.get(6).map(std::path::PathBuf::from);
     let arg = |i: usize, default: u64| args.get(i).copied().unwrap_or(default);
@@ -43,6 +48,7 @@ fn main() -> anyhow::Result<()> {
         t.elapsed().as_secs_f64() * 1e3
     );
     let tf = TransferFunction::ramp_above(40.0, 255.0, 0.5);
+    let extent = (n - 1) as f32;
     if let Some(path) = &store {
         let t = Instant::now();
         scenes::volume::store::write_source(path, &source)?;
@@ -56,10 +62,10 @@ fn main() -> anyhow::Result<()> {
         for table in TABLES {
             let file = BrickStore::open(path)?;
             match table {
-                "flat" => run(file, Flat::new(grid.count()), slots, &tf, n, size, frames),
-                "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, n, size, frames),
-                "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, n, size, frames),
-                _ => run(file, Hashed::new(), slots, &tf, n, size, frames),
+                "flat" => run(file, Flat::new(grid.count()), slots, &tf, extent, size, frames),
+                "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
+                "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
+                _ => run(file, Hashed::new(), slots, &tf, extent, size, frames),
             }?;
         }
         return Ok(());
@@ -70,10 +76,51 @@ fn main() -> anyhow::Result<()> {
     for table in TABLES {
         let source = ParticleBricks::new(n, count, brick).expect("as above");
         match table {
-            "flat" => run(source, Flat::new(grid.count()), slots, &tf, n, size, frames),
-            "multi-level" => run(source, MultiLevel::new(grid.bricks), slots, &tf, n, size, frames),
-            "64-tree" => run(source, Tree64::new(grid.bricks), slots, &tf, n, size, frames),
-            _ => run(source, Hashed::new(), slots, &tf, n, size, frames),
+            "flat" => run(source, Flat::new(grid.count()), slots, &tf, extent, size, frames),
+            "multi-level" => run(source, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
+            "64-tree" => run(source, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
+            _ => run(source, Hashed::new(), slots, &tf, extent, size, frames),
+        }?;
+    }
+    Ok(())
+}
+
+/// `ml N BRICK CACHE_MIB SIZE FRAMES PATH`: the Marschner–Lobb signal at N³ `f32` samples, dense
+/// (every brick stored), written to PATH as a store unless a store is there, then cast from the
+/// file through each page table: a file-backed volume as large as the disk allows.
+fn marschner_lobb(args: &[String]) -> anyhow::Result<()> {
+    use scenes::volume::store::MarschnerLobbBricks;
+    let num = |i: usize| -> anyhow::Result<u64> {
+        Ok(args.get(i).ok_or_else(|| anyhow::anyhow!("ml N BRICK CACHE_MIB SIZE FRAMES PATH"))?.parse()?)
+    };
+    let (n, brick, cache_mib, size, frames) = (num(0)? as u32, num(1)? as u32, num(2)?, num(3)? as u32, num(4)? as u32);
+    let path = std::path::PathBuf::from(args.get(5).ok_or_else(|| anyhow::anyhow!("a store path"))?);
+    let source = MarschnerLobbBricks::new(n, brick).ok_or_else(|| anyhow::anyhow!("no brick layout"))?;
+    if !path.exists() {
+        let t = Instant::now();
+        scenes::volume::store::write_source(&path, &source)?;
+        println!("written {}: {:.1} s", path.display(), t.elapsed().as_secs_f64());
+    }
+    let file = BrickStore::open(&path)?;
+    let grid = file.grid;
+    let brick_bytes = (grid.samples() * 4) as u64;
+    let slots = ((cache_mib << 20) / brick_bytes).max(1) as usize;
+    println!(
+        "marschner-lobb@{n}: {:.1} GiB of f32 samples, a {:.1} GiB file ({} bricks of {brick}³); cache {cache_mib} MiB = {slots} bricks",
+        u64::from(n).pow(3) as f64 * 4.0 / f64::from(1u32 << 30),
+        std::fs::metadata(&path)?.len() as f64 / f64::from(1u32 << 30),
+        grid.count(),
+    );
+    // The upper third of the signal: bricks below it are never read.
+    let tf = TransferFunction::ramp_above(0.7, 1.0, 0.4);
+    let extent = 2.0;
+    for table in TABLES {
+        let file = BrickStore::open(&path)?;
+        match table {
+            "flat" => run(file, Flat::new(grid.count()), slots, &tf, extent, size, frames),
+            "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
+            "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
+            _ => run(file, Hashed::new(), slots, &tf, extent, size, frames),
         }?;
     }
     Ok(())
@@ -142,17 +189,17 @@ fn run<S: BrickSource, T: PageTable + Sync>(
     table: T,
     slots: usize,
     tf: &TransferFunction,
-    n: u32,
+    extent: f32,
     size: u32,
     frames: u32,
 ) -> anyhow::Result<()> {
     let mut v = OocVolume::new(source, table, slots, Eviction::Clock);
     v.set_transfer_function(tf);
-    let centre = Vec3::splat((n - 1) as f32 * 0.5);
+    let centre = Vec3::splat(extent * 0.5);
     for f in 0..frames {
         // Around the volume, 30° a frame, from a little above.
         let angle = f as f32 * std::f32::consts::PI / 6.0;
-        let eye = centre + Vec3::new(angle.cos(), 0.35, angle.sin()) * n as f32 * 1.4;
+        let eye = centre + Vec3::new(angle.cos(), 0.35, angle.sin()) * extent * 1.4;
         let camera = Camera::new(CameraSpec { eye, target: centre, up: Vec3::Y, vfov_deg: 45.0 }, size, size);
         let t = Instant::now();
         let (img, s) = v.render(&camera, tf, 1.0)?;

@@ -544,6 +544,56 @@ impl BrickSource for ParticleBricks {
     }
 }
 
+/// The Marschner–Lobb signal (`marschner-lobb@N`) sampled brick by brick with the whole
+/// volume's arithmetic: a dense `f32` volume of any size, every brick stored, for a file-backed
+/// volume larger than memory ([`write_source`]).
+#[derive(Clone, Copy, Debug)]
+pub struct MarschnerLobbBricks {
+    n: u32,
+    grid: BrickGrid,
+}
+
+impl MarschnerLobbBricks {
+    pub fn new(n: u32, brick: u32) -> Option<Self> {
+        Some(Self { n, grid: BrickGrid::new([n; 3], brick)? })
+    }
+}
+
+impl BrickSource for MarschnerLobbBricks {
+    fn kind(&self) -> SampleKind {
+        SampleKind::F32
+    }
+    fn spacing(&self) -> [f32; 3] {
+        [2.0 / (self.n - 1) as f32; 3]
+    }
+    fn grid(&self) -> BrickGrid {
+        self.grid
+    }
+    /// The signal's own range, `[0, 1]`.
+    fn range(&self, _i: usize) -> (f32, f32) {
+        (0.0, 1.0)
+    }
+    fn cost(&self, _i: usize) -> u64 {
+        (self.grid.samples() * 4) as u64
+    }
+    fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
+        let g = self.grid;
+        if !matches!(out, Samples::F32(v) if v.len() == g.samples()) {
+            *out = SampleKind::F32.zeros(g.samples());
+        }
+        let Samples::F32(v) = out else { unreachable!("made f32 above") };
+        let b = g.brick(i);
+        let side = g.side() as u32;
+        let at = |i: u32| -1.0 + 2.0 * f64::from(i) / f64::from(self.n - 1);
+        for (k, dst) in v.iter_mut().enumerate() {
+            let k = k as u32;
+            let [x, y, z] = g.sample_of(b, [k % side, k / side % side, k / (side * side)]);
+            *dst = super::procedural::marschner_lobb_at(at(x), at(y), at(z)) as f32;
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -669,6 +719,20 @@ mod tests {
             assert!(std::fs::read(&from_source).expect("bytes") == std::fs::read(&path).expect("bytes"));
             std::fs::remove_dir_all(path.parent().expect("dir")).ok();
         }
+    }
+
+    #[test]
+    fn marschner_lobb_bricks_are_the_whole_signals_bricks() {
+        let (n, brick) = (29, 8);
+        let whole = super::super::procedural::marschner_lobb(n, 1 << 30).expect("signal");
+        let path = temp("marschner-lobb");
+        write_volume(&path, &whole, brick).expect("written");
+        let generated = MarschnerLobbBricks::new(n, brick).expect("layout");
+        let from_source = path.with_extension("generated");
+        write_source(&from_source, &generated).expect("written from the generator");
+        assert!(std::fs::read(&from_source).expect("bytes") == std::fs::read(&path).expect("bytes"));
+        assert_eq!(generated.spacing(), whole.spacing);
+        std::fs::remove_dir_all(path.parent().expect("dir")).ok();
     }
 
     #[test]
