@@ -59,30 +59,12 @@ fn main() -> anyhow::Result<()> {
             bytes as f64 / f64::from(1u32 << 30),
             t.elapsed().as_secs_f64()
         );
-        for table in TABLES {
-            let file = BrickStore::open(path)?;
-            match table {
-                "flat" => run(file, Flat::new(grid.count()), slots, &tf, extent, size, frames),
-                "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
-                "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
-                _ => run(file, Hashed::new(), slots, &tf, extent, size, frames),
-            }?;
-        }
-        return Ok(());
+        return run_tables(|| Ok(BrickStore::open(path)?), slots, &tf, extent, size, frames);
     }
     if n <= 1024 {
         in_core(n, count, brick, &tf, size)?;
     }
-    for table in TABLES {
-        let source = ParticleBricks::new(n, count, brick).expect("as above");
-        match table {
-            "flat" => run(source, Flat::new(grid.count()), slots, &tf, extent, size, frames),
-            "multi-level" => run(source, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
-            "64-tree" => run(source, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
-            _ => run(source, Hashed::new(), slots, &tf, extent, size, frames),
-        }?;
-    }
-    Ok(())
+    run_tables(|| Ok(ParticleBricks::new(n, count, brick).expect("as above")), slots, &tf, extent, size, frames)
 }
 
 /// `ml N BRICK CACHE_MIB SIZE FRAMES PATH`: the Marschner–Lobb signal at N³ `f32` samples, dense
@@ -114,16 +96,7 @@ fn marschner_lobb(args: &[String]) -> anyhow::Result<()> {
     // The upper third of the signal: bricks below it are never read.
     let tf = TransferFunction::ramp_above(0.7, 1.0, 0.4);
     let extent = 2.0;
-    for table in TABLES {
-        let file = BrickStore::open(&path)?;
-        match table {
-            "flat" => run(file, Flat::new(grid.count()), slots, &tf, extent, size, frames),
-            "multi-level" => run(file, MultiLevel::new(grid.bricks), slots, &tf, extent, size, frames),
-            "64-tree" => run(file, Tree64::new(grid.bricks), slots, &tf, extent, size, frames),
-            _ => run(file, Hashed::new(), slots, &tf, extent, size, frames),
-        }?;
-    }
-    Ok(())
+    run_tables(|| Ok(BrickStore::open(&path)?), slots, &tf, extent, size, frames)
 }
 
 /// The translation's cost: the same frame in core — the dense marcher and the `vdb` volume
@@ -182,6 +155,29 @@ fn warm<S: BrickSource, T: PageTable + Sync>(
     let t = Instant::now();
     let (img, _) = v.render(camera, tf, 1.0)?;
     Ok((t.elapsed().as_secs_f64() * 1e3, img.samples))
+}
+
+/// [`run`] through each page table in turn, each with a fresh source from `open`.
+fn run_tables<S: BrickSource>(
+    open: impl Fn() -> anyhow::Result<S>,
+    slots: usize,
+    tf: &TransferFunction,
+    extent: f32,
+    size: u32,
+    frames: u32,
+) -> anyhow::Result<()> {
+    for table in TABLES {
+        let source = open()?;
+        let bricks = source.grid().bricks;
+        let count = source.grid().count();
+        match table {
+            "flat" => run(source, Flat::new(count), slots, tf, extent, size, frames),
+            "multi-level" => run(source, MultiLevel::new(bricks), slots, tf, extent, size, frames),
+            "64-tree" => run(source, Tree64::new(bricks), slots, tf, extent, size, frames),
+            _ => run(source, Hashed::new(), slots, tf, extent, size, frames),
+        }?;
+    }
+    Ok(())
 }
 
 fn run<S: BrickSource, T: PageTable + Sync>(
