@@ -120,7 +120,7 @@ fn in_core(n: u32, count: u32, brick: u32, tf: &TransferFunction, size: u32) -> 
     let vdb = NTree::vdb(&volume, tf);
     let (ms, s) = time(&|| render(&vdb, &volume, tf, &camera, 1.0).samples);
     println!("  in core: vdb {ms:.0} ms, {:.1} ns a sample ({s} samples)", per_sample(ms, s));
-    let all = ParticleBricks::new(n, count, brick).expect("a layout").grid().count();
+    let all = scenes::volume::store::BrickGrid::new([n; 3], brick).expect("a layout").count();
     for table in TABLES {
         let source = ParticleBricks::new(n, count, brick).expect("a layout");
         let (ms, s) = match table {
@@ -138,7 +138,7 @@ fn in_core(n: u32, count: u32, brick: u32, tf: &TransferFunction, size: u32) -> 
 }
 
 fn source_bricks(n: u32, brick: u32) -> [u32; 3] {
-    ParticleBricks::new(n, 0, brick).expect("a layout").grid().bricks
+    scenes::volume::store::BrickGrid::new([n; 3], brick).expect("a layout").bricks
 }
 
 /// A frame's time and samples with every brick the frame needs already resident.

@@ -147,13 +147,7 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
         "| structure | Mrays/s | × esvo | steps/ray | visits/ray | empty steps by cell side | B/voxel | largest components (B/voxel) | build ms | × svdag build | build peak |\n",
     );
     out.push_str("|---|---:|---:|---:|---:|---|---:|---|---:|---:|---:|\n");
-    let mut rows: Vec<&Case> = at
-        .iter()
-        .copied()
-        .filter(|c| GRIDS.contains(&c.structure.as_str()) || OCTREES.contains(&c.structure.as_str()))
-        .collect();
-    let order = |c: &Case| GRIDS.iter().chain(&OCTREES).position(|s| *s == c.structure).unwrap_or(usize::MAX);
-    rows.sort_by_key(|c| order(c));
+    let rows = voxel_rows(at);
     let ratio = |c: &Case| match (mrays(c), esvo.and_then(mrays)) {
         (Some(m), Some(e)) => format!("{:.2}", m / e),
         _ => "—".into(),
@@ -191,6 +185,14 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
     out.push('\n');
 }
 
+/// The grids and octrees among `at`, grids first, each family in its list's order.
+fn voxel_rows<'a>(at: &[&'a Case]) -> Vec<&'a Case> {
+    let order = |c: &Case| GRIDS.iter().chain(&OCTREES).position(|s| *s == c.structure);
+    let mut rows: Vec<&Case> = at.iter().copied().filter(|c| order(c).is_some()).collect();
+    rows.sort_by_key(|c| order(c));
+    rows
+}
+
 /// The warp simulator's figures for a case's primary rays.
 fn simt(c: &Case) -> Option<&SimtStats> {
     c.cpu_primary()?.simt.as_ref()
@@ -218,14 +220,7 @@ fn lead(c: &Case, esvo: &Case) -> Option<(f64, f64, f64)> {
 /// predicted lead over ESVO by each bound; nothing where ESVO's rays were not simulated.
 fn simulated(out: &mut Sheet, at: &[&Case]) {
     let Some(esvo) = esvo_reference(at).filter(|e| simt(e).is_some()) else { return };
-    let mut rows: Vec<&Case> = at
-        .iter()
-        .copied()
-        .filter(|c| GRIDS.contains(&c.structure.as_str()) || OCTREES.contains(&c.structure.as_str()))
-        .filter(|c| simt(c).is_some())
-        .collect();
-    let order = |c: &Case| GRIDS.iter().chain(&OCTREES).position(|s| *s == c.structure).unwrap_or(usize::MAX);
-    rows.sort_by_key(|c| order(c));
+    let rows: Vec<&Case> = voxel_rows(at).into_iter().filter(|c| simt(c).is_some()).collect();
     out.push_str(
         "The same primary rays on a GPU, simulated (`kernels::simt`; not measured on a GPU): a GPU bound by \
          issue runs a structure at ESVO's warp-steps per ray over its own, one bound by memory transactions at \

@@ -82,17 +82,20 @@ impl SlotCache {
     /// as a miss, where it is not resident.
     #[inline]
     pub fn use_brick(&mut self, table: &impl PageTable, brick: u32) -> Option<Slot> {
-        match table.lookup(brick) {
-            Some(s) => {
-                self.hits += 1;
-                self.mark(s);
-                Some(s)
-            }
-            None => {
-                self.misses += 1;
-                None
-            }
+        let found = table.lookup(brick);
+        match found {
+            Some(s) => self.touch(s),
+            None => self.misses += 1,
         }
+        found
+    }
+
+    /// Slot `s`, found resident by a translation made elsewhere, marked used in this round
+    /// (pinned) and counted as a hit.
+    #[inline]
+    pub fn touch(&mut self, s: Slot) {
+        self.hits += 1;
+        self.mark(s);
     }
 
     #[inline]

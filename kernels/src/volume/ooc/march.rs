@@ -172,13 +172,13 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
             self.cache.next_round();
             // MARCH: every waiting ray as far as the resident bricks take it.
             let this = &*self;
-            let outcomes: Vec<(Outcome, Vec<u32>)> = rays.par_iter_mut().map(|r| this.march(r, tf, step)).collect();
+            let outcomes: Vec<(Outcome, Vec<Slot>)> = rays.par_iter_mut().map(|r| this.march(r, tf, step)).collect();
             let mut requests = Vec::new();
             let mut finished = Vec::new();
             for (i, (outcome, used)) in outcomes.into_iter().enumerate() {
-                for b in used {
-                    self.cache.use_brick(&self.table, b);
-                    touched[b as usize] = true;
+                for s in used {
+                    self.cache.touch(s);
+                    touched[self.cache.owner(s).expect("a slot a ray read holds a brick") as usize] = true;
                 }
                 match outcome {
                     Outcome::Done => finished.push(i),
@@ -216,9 +216,9 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
         Ok((VolumeImage { width: w, height: h, rgba, samples, visits: 0 }, stats))
     }
 
-    /// Marches `r` from its next sample until it ends or needs a missing brick; the bricks it
+    /// Marches `r` from its next sample until it ends or needs a missing brick; the slots it
     /// read from (each run of samples in one brick once), for the cache to pin.
-    fn march(&self, r: &mut Pending, tf: &TransferFunction, step: f32) -> (Outcome, Vec<u32>) {
+    fn march(&self, r: &mut Pending, tf: &TransferFunction, step: f32) -> (Outcome, Vec<Slot>) {
         let g = self.grid;
         let n = g.samples();
         let side = g.side() as u32;
@@ -236,8 +236,8 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
             }
             if !self.empty[b as usize] {
                 let Some(slot) = self.table.lookup(b) else { return (Outcome::Waits(b), used) };
-                if used.last() != Some(&b) {
-                    used.push(b);
+                if used.last() != Some(&slot) {
+                    used.push(slot);
                 }
                 let base = slot as usize * n;
                 let l = cell.map(|c| c % g.brick);
