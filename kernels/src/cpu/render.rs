@@ -126,6 +126,14 @@ impl Frame {
         ((tile % tiles_x) * TILE + i % TILE, (tile / tiles_x) * TILE + i / TILE)
     }
 
+    /// The image's pixels in the tile-major order, the padding of partial tiles left out: the
+    /// order a GPU dispatch takes the rays in (`simt::dispatch_rays`, [`secondary_rays`]).
+    pub fn dispatch_pixels(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
+        (0..Self::sample_count(width, height))
+            .map(move |i| Self::pixel_of(width, i))
+            .filter(move |&(x, y)| x < width && y < height)
+    }
+
     /// A frame from samples already in the tile-major order (a GPU readback), padding included.
     pub fn from_tile_major(width: u32, height: u32, samples: Vec<Sample>) -> Self {
         assert_eq!(samples.len(), Self::sample_count(width, height), "one sample per tile pixel");
@@ -346,10 +354,10 @@ fn shade_hit(
             if blocked { 0.0 } else { lambert }
         }
         Workload::Ao { samples } => {
-            let pixel = y * camera.width + x;
+            let (pixel, basis) = (y * camera.width + x, n.any_orthonormal_pair());
             let open = (0..samples)
                 .filter(|&k| {
-                    let (ao, t_max) = ao_ray(ctx, p, n, pixel, k);
+                    let (ao, t_max) = ao_ray(ctx, p, n, basis, pixel, k);
                     !occluded(accel, &ao, t_max, counters)
                 })
                 .count();
@@ -373,10 +381,10 @@ fn shadow_ray(ctx: &ShadeContext, p: Vec3) -> (Ray, f32) {
     (Ray::new(p, ctx.light - p), 1.0 - 1e-4)
 }
 
-/// Ambient-occlusion ray `k` of `pixel` from `p` about the normal `n`, and the end of its span.
+/// Ambient-occlusion ray `k` of `pixel` from `p` about the normal `n` (with `(t1, t2)`, its
+/// orthonormal pair, found once for a pixel's samples), and the end of its span.
 #[inline(always)]
-fn ao_ray(ctx: &ShadeContext, p: Vec3, n: Vec3, pixel: u32, k: u32) -> (Ray, f32) {
-    let (t1, t2) = n.any_orthonormal_pair();
+fn ao_ray(ctx: &ShadeContext, p: Vec3, n: Vec3, (t1, t2): (Vec3, Vec3), pixel: u32, k: u32) -> (Ray, f32) {
     let (u1, u2) = (unit_hash(ctx.seed, pixel, 2 * k), unit_hash(ctx.seed, pixel, 2 * k + 1));
     // Cosine-weighted hemisphere direction (Malley's method).
     let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
@@ -394,9 +402,8 @@ pub fn secondary_rays(
     ctx: &ShadeContext,
     workload: Workload,
 ) -> Vec<(Ray, f32)> {
-    let (w, h) = (camera.width, camera.height);
-    let pixels: Vec<(u32, u32)> =
-        (0..Frame::sample_count(w, h)).map(|i| Frame::pixel_of(w, i)).filter(|&(x, y)| x < w && y < h).collect();
+    let w = camera.width;
+    let pixels: Vec<(u32, u32)> = Frame::dispatch_pixels(w, camera.height).collect();
     let per_pixel = |&(x, y): &(u32, u32)| -> Vec<(Ray, f32)> {
         let ray = camera.ray(x, y);
         let Some(hit) = accel.intersect(&ray, 0.0, f32::INFINITY) else { return Vec::new() };
@@ -404,7 +411,10 @@ pub fn secondary_rays(
         match workload {
             Workload::Primary => Vec::new(),
             Workload::Shadow => vec![shadow_ray(ctx, p)],
-            Workload::Ao { samples } => (0..samples).map(|k| ao_ray(ctx, p, n, y * w + x, k)).collect(),
+            Workload::Ao { samples } => {
+                let basis = n.any_orthonormal_pair();
+                (0..samples).map(|k| ao_ray(ctx, p, n, basis, y * w + x, k)).collect()
+            }
         }
     };
     pixels.par_iter().flat_map_iter(per_pixel).collect()

@@ -86,11 +86,7 @@ pub struct Simulated {
 /// `cpu::render::Frame::pixel_of`; no padding), each with its span's end (none): what
 /// [`simulate`] groups 32 to a warp.
 pub fn dispatch_rays(camera: &scenes::Camera) -> Vec<(Ray, f32)> {
-    use crate::cpu::render::Frame;
-    let (w, h) = (camera.width, camera.height);
-    (0..Frame::sample_count(w, h))
-        .map(|i| Frame::pixel_of(w, i))
-        .filter(|&(x, y)| x < w && y < h)
+    crate::cpu::render::Frame::dispatch_pixels(camera.width, camera.height)
         .map(|(x, y)| (camera.ray(x, y), f32::INFINITY))
         .collect()
 }
