@@ -161,6 +161,14 @@ pub enum Preset {
     /// build and transfer-function update times, every image checked bit for bit against the
     /// dense one.
     Volume,
+    /// Seed 003's volumes larger than memory (issue 42): a particle field generated brick by brick
+    /// at 4096³ (64 GiB of `u8`, never whole), one at 1024³ and an MRI scan read back from brick
+    /// stores, cast ray-guided through a brick cache of 32 MiB, 128 MiB and 512 MiB, one page
+    /// table at a time (flat, multi-level, 64-tree, hash), along a 6-frame camera path at
+    /// 512×512: time per frame, rounds, bricks loaded, working set, hit rate, page-table bytes and
+    /// the heap held against the cache's budget; images checked against the in-core dense marcher
+    /// where the volume fits.
+    VolumeOoc,
     /// Every reproduction of docs/design.md §9 in one run and one report, which opens with "Paper
     /// results at a glance" (each claim held or not, linked to its table): org-fig1, org-fig2,
     /// org-table1, svdag-tables, svdag-shadow, svdag-temporal and esvo-beam, one after the other,

@@ -15,6 +15,7 @@ mod gpu;
 mod images;
 mod machine;
 mod merge;
+mod ooc;
 mod output;
 mod phases;
 mod plan;
@@ -57,8 +58,10 @@ fn main() -> ExitCode {
             .collect()
     };
     let result = match cli.command {
+        None if ooc::wanted(&cli.run) => ooc::run(&cli.run, command),
         None if volume::wanted(&cli.run) => volume::run(&cli.run, command),
         None => run::resume_or_run(&cli.run, &given(&matches), command),
+        Some(Command::Run(args)) if ooc::wanted(&args) => ooc::run(&args, command),
         Some(Command::Run(args)) if volume::wanted(&args) => volume::run(&args, command),
         Some(Command::Run(args)) => {
             let sub = matches.subcommand_matches("run").map(given).unwrap_or_default();
@@ -199,6 +202,9 @@ fn list(what: ListWhat) {
         );
         println!(
             "  volume     seed 003's volumes: mri-ch2, mri-ch2better, marschner-lobb@256, fog@dragon:512, particles at 1024³ and 2048³ through dense, bricks, octree, vdb, tree64 at 1 / 10 / 30 / 100 % visible voxels, 1024×1024"
+        );
+        println!(
+            "  volume-ooc volumes larger than memory: particles at 4096³ generated brick by brick, particles at 1024³ and mri-ch2better from brick stores, through flat, multi-level, 64-tree and hash page tables and 32M / 128M / 512M caches, 6 frames at 512×512"
         );
         let (scaled, full) = cli::PAPER_MINUTES;
         println!(

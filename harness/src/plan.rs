@@ -67,6 +67,11 @@ pub const VOLUME_SOURCES: &[&str] = &[
     "particles@2048:192000",
 ];
 
+/// The volume-ooc preset's sources (issue 42): an MRI scan (where mricron-data is installed)
+/// and a particle field at 1024³ read back from brick stores, checked against the in-core dense
+/// marcher; and a particle field at 4096³ (64 GiB of `u8`) generated brick by brick, never whole.
+pub const VOLUME_OOC_SOURCES: &[&str] = &["mri-ch2better", "store:particles@1024:24000", "particles@4096:60000"];
+
 /// The simd-parity preset's structures (issue 30): Embree and the other triangle references, then
 /// every family whose CPU kernel tests boxes or triangles in SIMD lanes (the wide BVH, the grids'
 /// ORG, the kd-tree, the triangle octree), then the voxel octrees, whose casters are scalar.
@@ -100,6 +105,7 @@ impl Preset {
             Preset::EsvoBeam => "esvo-beam",
             Preset::VoxelGrids => "voxel-grids",
             Preset::Volume => "volume",
+            Preset::VolumeOoc => "volume-ooc",
             Preset::Paper => "paper",
         }
     }
@@ -223,6 +229,7 @@ impl Preset {
             Preset::EsvoBeam => vec!["bvh", "esvo"],
             Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "svo", "esvo", "svdag"],
             Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
+            Preset::VolumeOoc => crate::ooc::TABLES.to_vec(),
             // Its parts name their own.
             Preset::Paper => Vec::new(),
             Preset::OrgFig1 => vec!["ug", "org"],
@@ -261,6 +268,7 @@ impl Preset {
             | Preset::EsvoBeam
             | Preset::VoxelGrids
             | Preset::Volume
+            | Preset::VolumeOoc
             | Preset::Paper => &[],
         }
     }
@@ -299,6 +307,7 @@ impl Preset {
             Preset::EsvoBeam => vec!["bunny", "dragon", "city", "terrain", "room"],
             Preset::VoxelGrids => vec!["bunny", "dragon", "city", "menger", "mandelbulb", "room"],
             Preset::Volume => VOLUME_SOURCES.to_vec(),
+            Preset::VolumeOoc => VOLUME_OOC_SOURCES.to_vec(),
             Preset::Paper => Vec::new(),
         };
         list.into_iter().map(String::from).collect()
@@ -329,7 +338,7 @@ impl Preset {
             | Preset::Volume => (1024, 1024),
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
-            Preset::SvdagShadow => (512, 512),
+            Preset::SvdagShadow | Preset::VolumeOoc => (512, 512),
         }
     }
 
@@ -346,6 +355,8 @@ impl Preset {
     fn frames(self) -> Option<u32> {
         match self {
             Preset::SvdagTemporal => Some(24),
+            // The camera path's frames.
+            Preset::VolumeOoc => Some(6),
             _ => None,
         }
     }

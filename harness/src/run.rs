@@ -114,6 +114,7 @@ fn run(args: &RunArgs, command: String, resumed: Option<Interrupted>) -> Result<
         skipped: Vec::new(),
         phases_s: Default::default(),
         volumes: Vec::new(),
+        ooc: Vec::new(),
     };
     let mut progress = Progress::default();
     let mut out = match resumed {

@@ -6,7 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::schema::{Case, Machine, MergedRun, Part, Results, SCHEMA, Settings, SkippedCase, VolumeCase};
+use crate::schema::{Case, Machine, MergedRun, OocCase, Part, Results, SCHEMA, Settings, SkippedCase, VolumeCase};
 
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
@@ -61,6 +61,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
         // Each run's own phases stay in its file.
         phases_s: Default::default(),
         volumes: Vec::new(),
+        ooc: Vec::new(),
     };
     for (tag, run) in runs {
         // The parts of many-part runs, each name once (a case names its part, not its run's).
@@ -80,6 +81,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
                 image: v.image.as_deref().map(|p| merged_image_path(tag, p)),
                 ..v.clone()
             }));
+            merged.ooc.extend(run.ooc.iter().map(|c| OocCase { machine: Some(tag.clone()), ..c.clone() }));
             merged
                 .skipped
                 .extend(run.skipped.iter().map(|k| SkippedCase { scene: format!("{} @{tag}", k.scene), ..k.clone() }));
@@ -87,6 +89,7 @@ pub fn merge(runs: &[(String, Results)]) -> Result<Results, MergeError> {
             merged.merged.extend(run.merged.iter().cloned());
             merged.cases.extend(run.cases.iter().cloned());
             merged.volumes.extend(run.volumes.iter().cloned());
+            merged.ooc.extend(run.ooc.iter().cloned());
             merged.skipped.extend(run.skipped.iter().cloned());
         }
     }
@@ -275,6 +278,7 @@ pub fn views(results: &Results) -> Vec<(Option<String>, Results)> {
                 skipped: Vec::new(),
                 phases_s: Default::default(),
                 volumes: results.volumes.iter().filter(|v| v.machine.as_deref() == Some(&m.tag)).cloned().collect(),
+                ooc: results.ooc.iter().filter(|c| c.machine.as_deref() == Some(&m.tag)).cloned().collect(),
             };
             (Some(m.tag.clone()), view)
         })

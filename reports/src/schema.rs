@@ -43,6 +43,10 @@ pub struct Results {
     /// structures; empty for a run of triangle scenes.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub volumes: Vec<VolumeCase>,
+    /// The `volume-ooc` preset's cases (issue 42): volumes larger than memory cast through a
+    /// fixed-size brick cache, one page table at a time, along a camera path.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub ooc: Vec<OocCase>,
 }
 
 /// How far a GPU volume image's channel may stray from the CPU's (issue 32).
@@ -124,6 +128,116 @@ impl VolumeCase {
     pub fn speed_up(&self) -> Option<f64> {
         let dense = self.dense_timing.as_ref()?.ms_median;
         (self.render.ms_median > 0.0).then(|| dense / self.render.ms_median)
+    }
+}
+
+/// An out-of-core volume cast along a camera path through one page table and one cache size
+/// (issue 42): per frame what it loaded and how long it took, and the heap it held.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OocCase {
+    pub source: String,
+    /// Where the bricks come from: generated brick by brick, or read from a store (its path).
+    pub provenance: String,
+    /// `generated` or `file`.
+    pub backing: String,
+    pub dims: [u32; 3],
+    /// `u8`, `u16` or `f32`.
+    pub sample_type: String,
+    /// The whole volume's samples: what an in-core structure would hold.
+    pub data_bytes: u64,
+    /// Cells per brick per axis; a brick holds `(brick + 1)³` samples (its apron).
+    pub brick: u32,
+    pub bricks: u64,
+    /// Bytes of one brick's samples: a cache slot.
+    pub brick_bytes: u64,
+    /// Bricks the transfer function leaves visible (by their stored value ranges).
+    pub visible_bricks: u64,
+    /// The store's size on disk (0 for a generated source).
+    pub stored_bytes: u64,
+    /// The transfer function's control points, `value:r,g,b,a` separated by `;`.
+    pub transfer_points: String,
+    /// The page table: `flat`, `multi-level`, `64-tree` or `hash`.
+    pub table: String,
+    /// `clock` or `lru`.
+    pub eviction: String,
+    /// The cache's budget and the slots it holds.
+    pub cache_bytes: u64,
+    pub slots: u64,
+    /// The page table's bytes, the largest after any frame.
+    pub table_bytes: u64,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    /// Lattice step along a ray, in the volume's units.
+    pub step: f32,
+    /// The camera path's frames in order.
+    pub frames: Vec<OocFrame>,
+    /// The last frame's camera once more: what a frame costs once its bricks are resident (where
+    /// the cache holds its working set, one round), so its time per sample is the translation's
+    /// and the marching's.
+    pub warm: OocFrame,
+    /// Heap bytes held above the case's start, at most (the harness's allocation count).
+    pub peak_bytes: u64,
+    /// What the case may hold beside the cache's samples, stated before it runs: the page table
+    /// at its largest, per-brick state, the source's index, per-pixel frame state and per-thread
+    /// buffers. `peak_bytes` must stay under `cache_bytes + overhead_bytes`.
+    pub overhead_bytes: u64,
+    /// Pixels of the first and last frames that differ in any bit from the in-core dense
+    /// marcher's, where the whole volume fits the run's oracle limit; `None`: not checked.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub mismatched_pixels: Option<u64>,
+    /// In-core references on the warm frame's camera, where the volume fits: ns per sample of
+    /// the dense marcher and of `vdb`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub dense_ns_per_sample: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub vdb_ns_per_sample: Option<f64>,
+    /// The machine tag in a merged result file (see [`Case::machine`]).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub machine: Option<String>,
+}
+
+/// One frame of an out-of-core case.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OocFrame {
+    pub ms: f64,
+    /// March-and-load rounds until no ray waited.
+    pub rounds: u32,
+    /// Bricks loaded, and the bytes read (or generated) for them.
+    pub loads: u64,
+    pub bytes_read: u64,
+    /// Translations that found the brick resident, and that did not (the ray then waited).
+    pub hits: u64,
+    pub misses: u64,
+    pub evictions: u64,
+    /// Distinct bricks the frame's samples read.
+    pub working_set: u64,
+    /// Samples taken in all.
+    pub samples: u64,
+}
+
+impl OocFrame {
+    /// The share of translations that found their brick resident.
+    pub fn hit_rate(&self) -> f64 {
+        self.hits as f64 / (self.hits + self.misses).max(1) as f64
+    }
+}
+
+impl OocCase {
+    /// The frames after the first (which fills the cache), or the first alone.
+    pub fn steady(&self) -> &[OocFrame] {
+        if self.frames.len() > 1 { &self.frames[1..] } else { &self.frames }
+    }
+
+    /// Mean milliseconds a frame over [`Self::steady`].
+    pub fn steady_ms(&self) -> f64 {
+        let s = self.steady();
+        s.iter().map(|f| f.ms).sum::<f64>() / s.len().max(1) as f64
+    }
+
+    /// Nanoseconds a sample on the warm frame.
+    pub fn warm_ns_per_sample(&self) -> f64 {
+        self.warm.ms * 1e6 / self.warm.samples.max(1) as f64
     }
 }
 
@@ -508,6 +622,7 @@ impl Results {
             skipped: Vec::new(),
             phases_s: self.phases_s.clone(),
             volumes: Vec::new(),
+            ooc: Vec::new(),
         }
     }
 

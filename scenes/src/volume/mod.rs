@@ -156,6 +156,26 @@ pub fn is_volume(name: &str) -> bool {
         || raw::parse_spec(name).is_some()
 }
 
+/// `N` of `marschner-lobb@N`; `None` for another name.
+pub fn marschner_lobb_size(name: &str) -> Result<Option<u32>, SceneError> {
+    let Some(size) = name.strip_prefix("marschner-lobb@") else { return Ok(None) };
+    size.parse::<u32>().map(Some).map_err(|_| SceneError::UnknownScene {
+        name: name.into(),
+        detail: format!("'{size}' is not a size: marschner-lobb@N samples the signal at N³ points"),
+    })
+}
+
+/// `(N, COUNT)` of `particles@N:COUNT`; `None` for another name.
+pub fn particles_shape(name: &str) -> Result<Option<(u32, u32)>, SceneError> {
+    let Some(shape) = name.strip_prefix("particles@") else { return Ok(None) };
+    let parsed =
+        shape.split_once(':').and_then(|(n, count)| Some((n.parse::<u32>().ok()?, count.parse::<u32>().ok()?)));
+    parsed.map(Some).ok_or_else(|| SceneError::UnknownScene {
+        name: name.into(),
+        detail: format!("'{shape}' is not a field: particles@N:COUNT puts COUNT blobs in an N³ box"),
+    })
+}
+
 /// Loads the volume `name` — a built-in name, `marschner-lobb@N`, `particles@N:COUNT`, a
 /// `.nii`/`.nii.gz` file or a raw `path@XxYxZ:type` — allocating at most `max_bytes` for its file and its samples.
 pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
@@ -169,20 +189,10 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
             None => procedural::marschner_lobb(procedural::MARSCHNER_LOBB_SIZE, max_bytes),
         };
     }
-    if let Some(size) = name.strip_prefix("marschner-lobb@") {
-        let n = size.parse::<u32>().map_err(|_| SceneError::UnknownScene {
-            name: name.into(),
-            detail: format!("'{size}' is not a size: marschner-lobb@N samples the signal at N³ points"),
-        })?;
+    if let Some(n) = marschner_lobb_size(name)? {
         return procedural::marschner_lobb(n, max_bytes);
     }
-    if let Some(shape) = name.strip_prefix("particles@") {
-        let parsed =
-            shape.split_once(':').and_then(|(n, count)| Some((n.parse::<u32>().ok()?, count.parse::<u32>().ok()?)));
-        let (n, count) = parsed.ok_or_else(|| SceneError::UnknownScene {
-            name: name.into(),
-            detail: format!("'{shape}' is not a field: particles@N:COUNT puts COUNT blobs in an N³ box"),
-        })?;
+    if let Some((n, count)) = particles_shape(name)? {
         return procedural::particles(n, count, max_bytes);
     }
     if let Some(recipe) = name.strip_prefix("fog@") {

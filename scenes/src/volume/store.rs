@@ -423,6 +423,32 @@ pub trait BrickSource: Sync {
     fn cost(&self, i: usize) -> u64;
     /// Brick `i`'s samples into `out` (resized to the source's type and size).
     fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError>;
+    /// Heap bytes the source holds to serve its bricks (a store's index, a field's blob lists).
+    fn held_bytes(&self) -> u64;
+}
+
+impl<S: BrickSource + ?Sized> BrickSource for &S {
+    fn kind(&self) -> SampleKind {
+        (**self).kind()
+    }
+    fn spacing(&self) -> [f32; 3] {
+        (**self).spacing()
+    }
+    fn grid(&self) -> BrickGrid {
+        (**self).grid()
+    }
+    fn range(&self, i: usize) -> (f32, f32) {
+        (**self).range(i)
+    }
+    fn cost(&self, i: usize) -> u64 {
+        (**self).cost(i)
+    }
+    fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
+        (**self).read_brick(i, out)
+    }
+    fn held_bytes(&self) -> u64 {
+        (**self).held_bytes()
+    }
 }
 
 impl BrickSource for BrickStore {
@@ -444,6 +470,29 @@ impl BrickSource for BrickStore {
     fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
         BrickStore::read_brick(self, i, &mut Vec::new(), out)
     }
+    fn held_bytes(&self) -> u64 {
+        (self.entries.capacity() * size_of::<BrickEntry>() + self.path.capacity()) as u64
+    }
+}
+
+/// The procedural source `name` generated brick by brick in bricks of `brick³` cells —
+/// `particles@N:COUNT` or `marschner-lobb@N` — or `None` for a name that is neither.
+pub fn generated(name: &str, brick: u32) -> Result<Option<Box<dyn BrickSource>>, SceneError> {
+    let no_layout = |dims: u32| SceneError::UnknownScene {
+        name: name.into(),
+        detail: format!(
+            "no brick layout of {dims}³ samples in bricks of {brick}³ cells (a power of two up to {MAX_BRICK}, at most 2³² bricks)"
+        ),
+    };
+    if let Some((n, count)) = super::particles_shape(name)? {
+        let source = ParticleBricks::new(n, count, brick).ok_or_else(|| no_layout(n))?;
+        return Ok(Some(Box::new(source)));
+    }
+    if let Some(n) = super::marschner_lobb_size(name)? {
+        let source = MarschnerLobbBricks::new(n, brick).ok_or_else(|| no_layout(n))?;
+        return Ok(Some(Box::new(source)));
+    }
+    Ok(None)
 }
 
 /// A particle field ([`super::procedural::ParticleField`]) sampled brick by brick when a brick is
@@ -505,6 +554,10 @@ impl BrickSource for ParticleBricks {
     }
     fn cost(&self, i: usize) -> u64 {
         if self.blobs(i).is_empty() { 0 } else { self.grid.samples() as u64 }
+    }
+    fn held_bytes(&self) -> u64 {
+        (self.reaches.capacity() * size_of::<(u32, u32)>() + self.field.centres.capacity() * size_of::<[f32; 3]>())
+            as u64
     }
     fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
         let g = self.grid;
@@ -575,6 +628,9 @@ impl BrickSource for MarschnerLobbBricks {
     }
     fn cost(&self, _i: usize) -> u64 {
         (self.grid.samples() * 4) as u64
+    }
+    fn held_bytes(&self) -> u64 {
+        0
     }
     fn read_brick(&self, i: usize, out: &mut Samples) -> Result<(), SceneError> {
         let g = self.grid;

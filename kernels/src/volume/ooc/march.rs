@@ -22,6 +22,14 @@ use super::cache::{Allocation, Eviction, SlotCache};
 use super::page_table::{PageTable, Slot};
 use crate::volume::{TransferFunction, VolumeImage, blend, cell_at, interpolate, samples_in};
 
+/// Heap bytes a cache slot's records take ([`SlotCache`]: owner, last use, clock bit, free-list entry).
+const SLOT_RECORD_BYTES: usize = 4 + 8 + 1 + 4;
+
+/// A bound on a frame's heap per pixel: its colour (16 bytes), its ray's state between rounds
+/// ([`Pending`]), its round's outcome and the slots it read (up to 32 distinct runs of bricks in a
+/// round before the list is reallocated past 128 bytes), its request, and the order of finished rays.
+pub const FRAME_BYTES_PER_PIXEL: u64 = 16 + size_of::<Pending>() as u64 + 2 * (8 + 24 + 128) + 4 + 8;
+
 /// One frame's work.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameStats {
@@ -123,6 +131,28 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
 
     pub fn table(&self) -> &T {
         &self.table
+    }
+
+    /// Bytes of the cache's samples (its slots × a brick's samples).
+    pub fn pool_bytes(&self) -> u64 {
+        (self.pool.len() * self.source.kind().bytes()) as u64
+    }
+
+    /// Heap bytes the volume holds beside the cache's samples: per-brick emptiness, the slots'
+    /// records and the page table (its pages kept for reuse included). The source's own state
+    /// (a store's index, a field's blob lists) is the source's.
+    pub fn state_bytes(&self) -> u64 {
+        let per_brick = self.empty.capacity() + self.leap.capacity();
+        (per_brick + self.cache.slots() * SLOT_RECORD_BYTES) as u64 + self.table.held_bytes()
+    }
+
+    /// A bound on the heap a frame of `pixels` rays holds while it runs, on `threads` worker
+    /// threads: per pixel its colour, its ray's state between rounds and the round's outcome
+    /// with the slots the ray read ([`FRAME_BYTES_PER_PIXEL`] in all); per virtual brick whether
+    /// the frame read it; per thread two bricks' buffers for loading (a brick and its bytes read).
+    pub fn frame_bytes(&self, pixels: u64, threads: usize) -> u64 {
+        let brick = (self.grid.samples() * self.source.kind().bytes()) as u64;
+        pixels * FRAME_BYTES_PER_PIXEL + self.empty.len() as u64 + 2 * brick * threads as u64
     }
 
     /// Renders `camera`'s rays through the volume under `tf` every `step`, as

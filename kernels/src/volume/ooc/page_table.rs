@@ -39,6 +39,10 @@ pub trait PageTable {
     fn unmap(&mut self, brick: u32);
     /// Bytes the table holds now.
     fn bytes(&self) -> u64;
+    /// Heap bytes the table has allocated: [`PageTable::bytes`] and pages kept for reuse.
+    fn held_bytes(&self) -> u64 {
+        self.bytes()
+    }
     /// Memory reads a lookup makes (for a hash table, the expected probes of a hit).
     fn reads_per_lookup(&self) -> f64;
 }
@@ -169,6 +173,11 @@ impl PageTable for MultiLevel {
         let page = u64::from(PAGE * PAGE * PAGE) * size_of::<u32>() as u64;
         (self.directory.len() * size_of::<u32>()) as u64 + (self.pages.len() - self.free.len()) as u64 * page
     }
+    fn held_bytes(&self) -> u64 {
+        let page = u64::from(PAGE * PAGE * PAGE) * size_of::<u32>() as u64;
+        let records = self.pages.capacity() * size_of::<(Box<[u32]>, u32)>() + self.free.capacity() * 4;
+        (self.directory.capacity() * size_of::<u32>() + records) as u64 + self.pages.len() as u64 * page
+    }
     fn reads_per_lookup(&self) -> f64 {
         2.0
     }
@@ -285,6 +294,9 @@ impl PageTable for Tree64 {
     /// The nodes in use, 64 entries each.
     fn bytes(&self) -> u64 {
         ((self.nodes.len() - self.free.len()) * 64 * size_of::<u32>()) as u64
+    }
+    fn held_bytes(&self) -> u64 {
+        (self.nodes.capacity() * size_of::<([u32; 64], u32)>() + self.free.capacity() * size_of::<u32>()) as u64
     }
     fn reads_per_lookup(&self) -> f64 {
         f64::from(self.levels)
