@@ -444,6 +444,44 @@ pub fn speed_up_occupancy(title: &str, series: &[SpeedUps], published: &[Publish
     })
 }
 
+/// Time per frame against the brick cache's size, log–log (issue 42): one line per page table
+/// (`(cache bytes, ms a frame)` points, in order of size).
+pub fn frame_time_cache(title: &str, series: &[SpeedUps]) -> Result<String, PlotError> {
+    let points = series.iter().flat_map(|s| s.points.iter().copied());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
+    for (x, y) in points.filter(|&(x, y)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()) {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if x1 <= 0.0 || y1 <= 0.0 {
+        return Err(PlotError { title: title.into(), message: "no frame times to plot".into() });
+    }
+    let (xr, yr) = ((x0 / 1.6, x1 * 1.6), (y0 / 1.5, y1 * 1.5));
+    let legend: Vec<Entry> = series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Entry { label: s.label.clone(), color: color(i), marker: Marker::Dot })
+        .collect();
+    svg(title, SCALING_SIZE, &legend, |root| {
+        let x_label = |v: &f64| bytes(*v);
+        let y_label = |v: &f64| significant(*v);
+        let mut chart = log_log_frame(
+            root,
+            title,
+            60,
+            LogAxis { range: xr, ticks: byte_ticks(xr.0, xr.1), desc: "brick cache", label: &x_label },
+            LogAxis { range: yr, ticks: log_ticks(yr.0, yr.1), desc: "ms a frame (after the first)", label: &y_label },
+        )?;
+        for (i, s) in series.iter().enumerate() {
+            let c = color(i);
+            let mut points = s.points.clone();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart.draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2))).map_err(e)?;
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
 /// The choices no other is both smaller and faster than, by memory.
 fn pareto_front<'a>(points: &[&'a Choice]) -> Vec<&'a Choice> {
     let mut sorted = points.to_vec();

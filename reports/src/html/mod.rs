@@ -108,6 +108,7 @@ fn chapter_body(out: &mut String, chapter: &chapters::Chapter, images: &Shots) {
     if !results.volumes.is_empty() {
         volume_charts(out, &results.volumes, prefix);
     }
+    ooc_charts(out, &results.ooc, prefix);
     if !chapter.studies.is_empty() {
         scaling_section(out, &chapter.studies, prefix);
     }
@@ -262,6 +263,9 @@ fn chapter_contents(chapter: &chapters::Chapter) -> String {
     if !chapter.results.volumes.is_empty() {
         let _ =
             writeln!(out, "<li><a href=\"#{prefix}volume-charts\">Volumes: speed-up against visible voxels</a></li>");
+    }
+    if !chapter.results.ooc.is_empty() {
+        let _ = writeln!(out, "<li><a href=\"#{prefix}ooc-charts\">Volumes larger than memory</a></li>");
     }
     if !chapter.studies.is_empty() {
         let _ = writeln!(out, "<li><a href=\"#{prefix}scaling\">Scaling</a></li>");
@@ -438,6 +442,25 @@ fn volume_charts(out: &mut String, cases: &[VolumeCase], prefix: &str) {
             out,
             plots::speed_up_occupancy(&format!("{source}: × dense against visible voxels"), &series, &published),
         );
+    }
+    let _ = writeln!(out, "</div></section>");
+}
+
+/// Per out-of-core source, the time a frame takes against the brick cache's size, a line per page
+/// table (the tables are in the paper reproductions).
+fn ooc_charts(out: &mut String, cases: &[crate::schema::OocCase], prefix: &str) {
+    if cases.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "<section id=\"{prefix}ooc-charts\"><h2>Volumes larger than memory: time a frame against the cache</h2>\n<p \
+         class=\"note\">Per source, the mean time of a frame after the first (which fills the cache) against the \
+         brick cache's budget, a line per page table (log–log).</p>\n<div class=\"charts\">"
+    );
+    for source in paper::ooc::sources(cases) {
+        let series = paper::ooc::frame_times(cases, source);
+        chart(out, plots::frame_time_cache(&format!("{source}: ms a frame against the cache"), &series));
     }
     let _ = writeln!(out, "</div></section>");
 }

@@ -9,12 +9,14 @@
 //! [`org_scaling`] (seed 002 Fig. 1 and Fig. 2), [`org_table1`] (Table 1), [`svdag_tables`] (seed
 //! 001 Tables 1–3, Fig. 13), [`svdag_shadow`] (Table 4), [`svdag_temporal`] (Tables 5–6), [`esvo`]
 //! (seed 000 §5.6 and §6.2, ESVO at scale), [`voxel_grids`] (grid or octree on the same voxels),
-//! [`volumes`] (seed 003's volumes: empty space skipped per structure), [`simd_parity`] (issue 30:
+//! [`volumes`] (seed 003's volumes: empty space skipped per structure), [`ooc`] (issue 42: volumes
+//! larger than memory through a brick cache and page tables), [`simd_parity`] (issue 30:
 //! every family beside Embree, SIMD and scalar);
 //! `grid_builds` is what the grid reproductions share.
 
 pub mod esvo;
 mod grid_builds;
+pub mod ooc;
 pub mod org_scaling;
 pub mod org_table1;
 pub mod simd_parity;
@@ -55,5 +57,7 @@ pub fn section(results: &Results) -> Sheet {
     out.append(voxel_grids::section(results));
     // Seed 003's volumes wherever a run has volume cases.
     out.append(volumes::section(results));
+    // Seed 003's volumes larger than memory wherever a run has out-of-core cases.
+    out.append(ooc::section(results));
     out
 }
