@@ -113,8 +113,11 @@ impl Settings {
             bail!("--param volume.step={step_voxels}: a step above 0 and at most 16 voxels");
         }
         let oracle_text: String = params.get("volume.oracle", "1G".to_string())?;
-        let oracle = crate::budget::parse_size(&oracle_text)
-            .map_err(|e| anyhow::anyhow!("--param volume.oracle={oracle_text}: {e}"))?;
+        let oracle = match oracle_text.trim() {
+            "0" => 0,
+            text => crate::budget::parse_size(text)
+                .map_err(|e| anyhow::anyhow!("--param volume.oracle={oracle_text}: {e} (or 0: no oracle)"))?,
+        };
         Ok(Self { caches, eviction, brick, scratch, tf, step_voxels, oracle })
     }
 }

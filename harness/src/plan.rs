@@ -69,8 +69,10 @@ pub const VOLUME_SOURCES: &[&str] = &[
 
 /// The volume-ooc preset's sources (issue 42): an MRI scan (where mricron-data is installed)
 /// and a particle field at 1024³ read back from brick stores, checked against the in-core dense
-/// marcher; and a particle field at 4096³ (64 GiB of `u8`) generated brick by brick, never whole.
-pub const VOLUME_OOC_SOURCES: &[&str] = &["mri-ch2better", "store:particles@1024:24000", "particles@4096:60000"];
+/// marcher; and a sparse particle field at 4096³ (64 GiB of `u8`, 0.6 % of its bricks visible)
+/// generated brick by brick, never whole. The particle fields are seen through (their blobs are
+/// translucent), so a frame's working set is every visible brick in view.
+pub const VOLUME_OOC_SOURCES: &[&str] = &["mri-ch2better", "store:particles@1024:3000", "particles@4096:8000"];
 
 /// The simd-parity preset's structures (issue 30): Embree and the other triangle references, then
 /// every family whose CPU kernel tests boxes or triangles in SIMD lanes (the wide BVH, the grids'
@@ -338,7 +340,8 @@ impl Preset {
             | Preset::Volume => (1024, 1024),
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
-            Preset::SvdagShadow | Preset::VolumeOoc => (512, 512),
+            Preset::SvdagShadow => (512, 512),
+            Preset::VolumeOoc => (256, 256),
         }
     }
 

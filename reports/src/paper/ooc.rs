@@ -132,7 +132,7 @@ pub fn section(results: &Results) -> Sheet {
         let s = of[0];
         let _ = writeln!(
             out,
-            "### {source}\n\n{}. Transfer function `{}`; step {} along a ray.{}\n",
+            "### {source}\n\n{}. Transfer function `{}`; step {:.4} along a ray.{}\n",
             s.provenance,
             s.transfer_points,
             s.step,
@@ -179,7 +179,9 @@ pub fn section(results: &Results) -> Sheet {
     out.push_str("### Translation schemes side by side\n\n");
     out.push_str(
         "Warm ns a sample per page table at the largest cache (the same samples through each), × the flat table, and \
-         × the in-core vdb where the volume fits.\n\n",
+         × the in-core vdb where the volume fits (vdb's time includes its own skipping, over fewer samples). Where the \
+         cache cannot hold the last frame's working set, its warm frame loads again (*reloads*): then the figure is \
+         the loads' as much as the translation's.\n\n",
     );
     out.push_str(
         "| source | table | warm ns/sample | × flat | × in-core vdb | table bytes |\n|---|---|---:|---:|---:|---:|\n",
@@ -192,8 +194,9 @@ pub fn section(results: &Results) -> Sheet {
             let ns = c.warm_ns_per_sample();
             let _ = writeln!(
                 out,
-                "| {source} | {} | {ns:.1} | {} | {} | {} |",
+                "| {source} | {}{} | {ns:.1} | {} | {} | {} |",
                 c.table,
+                if c.warm.rounds > 1 { " (reloads)" } else { "" },
                 flat.map_or("—".into(), |f| format!("{:.2}×", ns / f)),
                 c.vdb_ns_per_sample.map_or("—".into(), |v| format!("{:.2}×", ns / v)),
                 bytes(c.table_bytes),

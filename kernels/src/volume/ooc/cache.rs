@@ -42,6 +42,12 @@ pub struct SlotCache {
     referenced: Vec<bool>,
     free: Vec<Slot>,
     hand: usize,
+    /// LRU's candidates in this round: the slots not pinned when the round's first victim was
+    /// sought, least recently used last (ties: the lowest slot last), so that a round's victims
+    /// cost one sort instead of a scan of every slot each.
+    lru_queue: Vec<Slot>,
+    /// The round `lru_queue` was sorted in (0: never).
+    queue_round: u64,
     /// The current round (starts at 1: a slot last used in round 0 was never used).
     round: u64,
     pub hits: u64,
@@ -62,6 +68,8 @@ impl SlotCache {
             referenced: vec![false; slots],
             free: (0..slots as Slot).rev().collect(),
             hand: 0,
+            lru_queue: Vec::new(),
+            queue_round: 0,
             round: 1,
             hits: 0,
             misses: 0,
@@ -133,7 +141,23 @@ impl SlotCache {
     fn victim(&mut self) -> Option<Slot> {
         let n = self.owner.len();
         match self.policy {
-            Eviction::Lru => (0..n).filter(|&s| !self.pinned(s)).min_by_key(|&s| self.last_used[s]).map(|s| s as Slot),
+            Eviction::Lru => {
+                // A slot's last use changes in a round only by being pinned, so the order sorted
+                // at the round's first eviction holds for the round; pinned ones are passed over.
+                if self.queue_round != self.round {
+                    let (last_used, round) = (&self.last_used, self.round);
+                    self.lru_queue.clear();
+                    self.lru_queue.extend((0..n as Slot).filter(|&s| last_used[s as usize] != round));
+                    self.lru_queue.sort_unstable_by_key(|&s| std::cmp::Reverse((last_used[s as usize], s)));
+                    self.queue_round = self.round;
+                }
+                while let Some(s) = self.lru_queue.pop() {
+                    if !self.pinned(s as usize) {
+                        return Some(s);
+                    }
+                }
+                None
+            }
             Eviction::Clock => {
                 // Two sweeps at most: the first clears the references it passes.
                 for _ in 0..2 * n {
@@ -185,6 +209,43 @@ mod tests {
             assert_eq!((table.lookup(10), table.lookup(40)), (None, Some(s)), "{policy:?}");
             assert_eq!(cache.owner(s), Some(40));
         }
+    }
+
+    /// LRU's victims, sorted once a round, are the linear scan's: the least recently used slot
+    /// not pinned, the lowest of equals — over rounds of random uses and allocations.
+    #[test]
+    fn lru_victims_equal_a_scan_of_every_slot() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(42);
+        let mut table = Flat::new(400);
+        let mut cache = SlotCache::new(37, Eviction::Lru);
+        let mut evicted = 0;
+        for _ in 0..300 {
+            cache.next_round();
+            for _ in 0..rng.random_range(0..20) {
+                cache.use_brick(&table, rng.random_range(0..400));
+            }
+            for _ in 0..rng.random_range(0..30) {
+                let b = rng.random_range(0..400);
+                if table.lookup(b).is_some() {
+                    continue;
+                }
+                let n = cache.slots();
+                let expected = match cache.free.last() {
+                    Some(_) => None,
+                    None => (0..n).filter(|&s| !cache.pinned(s)).min_by_key(|&s| cache.last_used[s]).map(|s| s as Slot),
+                };
+                match cache.allocate(&mut table, b) {
+                    Allocation::Evicted(s, _) => {
+                        assert_eq!(Some(s), expected);
+                        evicted += 1;
+                    }
+                    Allocation::Full => assert_eq!(expected, None),
+                    Allocation::Free(_) => {}
+                }
+            }
+        }
+        assert!(evicted > 1000, "the test evicts: {evicted}");
     }
 
     #[test]

@@ -81,6 +81,21 @@ struct Pending {
     skipped: u64,
 }
 
+/// The distinct bricks of `requests` (one per waiting ray), the most requested first; of equals,
+/// the lowest index first.
+fn most_wanted(mut requests: Vec<u32>) -> Vec<u32> {
+    requests.sort_unstable();
+    let mut counted: Vec<(u32, u32)> = Vec::new();
+    for b in requests {
+        match counted.last_mut() {
+            Some((last, n)) if *last == b => *n += 1,
+            _ => counted.push((b, 1)),
+        }
+    }
+    counted.sort_by_key(|&(b, n)| (std::cmp::Reverse(n), b));
+    counted.into_iter().map(|(b, _)| b).collect()
+}
+
 /// What one round did to one ray.
 enum Outcome {
     Done,
@@ -224,11 +239,12 @@ impl<S: BrickSource, T: PageTable + Sync> OocVolume<S, T> {
                 samples += r.samples;
                 stats.leaps += r.skipped;
             }
-            // LOAD: each requested brick once, as long as a slot is not pinned by this round.
-            requests.sort_unstable();
-            requests.dedup();
+            // LOAD: each requested brick once, as long as a slot is not pinned by this round — the
+            // bricks most rays wait for first, so that a cache too small for the round's requests
+            // lets the most rays go on.
+            let wanted = most_wanted(requests);
             let mut loads: Vec<(Slot, u32)> = Vec::new();
-            for &b in &requests {
+            for &b in &wanted {
                 match self.cache.allocate(&mut self.table, b) {
                     Allocation::Free(s) | Allocation::Evicted(s, _) => loads.push((s, b)),
                     Allocation::Full => break,
@@ -341,6 +357,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("accel-bench-ooc-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         dir.join("v.bricks")
+    }
+
+    #[test]
+    fn the_bricks_most_rays_wait_for_are_loaded_first() {
+        assert_eq!(most_wanted(vec![7, 3, 9, 3, 7, 3, 1]), vec![3, 7, 1, 9]);
+        assert_eq!(most_wanted(Vec::new()), Vec::<u32>::new());
     }
 
     /// The dense marcher's image bit for bit, with every page table and eviction policy, from a
