@@ -32,6 +32,8 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::os::unix::fs::FileExt;
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use super::{Samples, Volume};
 use crate::error::{Location, SceneError};
 
@@ -157,15 +159,16 @@ impl BrickEntry {
 }
 
 /// Writes a store of `dims` samples of `kind` at `spacing` to `path`, `brick³` cells a brick,
-/// each brick's `(B + 1)³` samples (x fastest, [`BrickGrid::sample_of`]) filled by `fill` in turn
-/// — one brick in memory at a time; an error from `fill` ends the write. Returns the layout.
+/// each brick's `(B + 1)³` samples (x fastest, [`BrickGrid::sample_of`]) filled by `fill` — on
+/// every worker thread, eight bricks a thread in memory at a time, written in order; an error
+/// from `fill` ends the write. Returns the layout.
 pub fn write_store(
     path: &Path,
     kind: SampleKind,
     dims: [u32; 3],
     spacing: [f32; 3],
     brick: u32,
-    mut fill: impl FnMut([u32; 3], &mut Samples) -> Result<(), SceneError>,
+    fill: impl Fn([u32; 3], &mut Samples) -> Result<(), SceneError> + Sync,
 ) -> Result<BrickGrid, SceneError> {
     let name = path.display().to_string();
     let io = |source| SceneError::Io { path: name.clone(), source };
@@ -180,22 +183,34 @@ pub fn write_store(
     })?;
     let mut out = BufWriter::new(File::create(path).map_err(io)?);
     out.write_all(&[0; HEADER_BYTES as usize]).map_err(io)?;
-    let mut samples = kind.zeros(grid.samples());
-    let mut bytes = Vec::with_capacity(grid.samples() * kind.bytes());
     let mut entries = Vec::with_capacity(grid.count());
     let mut offset = HEADER_BYTES;
-    for i in 0..grid.count() {
-        fill(grid.brick(i), &mut samples)?;
-        let (min, max) = range(&samples);
-        // A brick of one value stores none (a NaN sample is never equal: such a brick is stored).
-        let constant = min == max && (0..samples.len()).all(|k| samples.get(k).to_bits() == min.to_bits());
-        bytes.clear();
-        if !constant {
-            encode(&samples, &mut bytes);
-            out.write_all(&bytes).map_err(io)?;
+    // Bricks are filled and encoded a batch at a time on every worker thread, then written in
+    // order: a batch of bricks in memory, never the volume.
+    let batch = rayon::current_num_threads() * 8;
+    // Per brick of the batch: its samples, its stored bytes, its range and their CRC.
+    let mut encoded: Vec<(Samples, Vec<u8>, (f32, f32), u32)> = Vec::new();
+    for first in (0..grid.count()).step_by(batch) {
+        let end = (first + batch).min(grid.count());
+        encoded.resize_with(end - first, || (kind.zeros(grid.samples()), Vec::new(), (0.0, 0.0), 0));
+        encoded.par_iter_mut().enumerate().try_for_each(|(j, (samples, bytes, range_of, crc))| {
+            fill(grid.brick(first + j), samples)?;
+            let (min, max) = range(samples);
+            // A brick of one value stores none (a NaN sample is never equal: such a brick is stored).
+            let constant = min == max && (0..samples.len()).all(|k| samples.get(k).to_bits() == min.to_bits());
+            bytes.clear();
+            if !constant {
+                encode(samples, bytes);
+            }
+            *range_of = (min, max);
+            *crc = crc32fast::hash(bytes);
+            Ok::<(), SceneError>(())
+        })?;
+        for (_, bytes, (min, max), crc) in &encoded {
+            out.write_all(bytes).map_err(io)?;
+            entries.push(BrickEntry { offset, bytes: bytes.len() as u32, min: *min, max: *max, crc: *crc });
+            offset += bytes.len() as u64;
         }
-        entries.push(BrickEntry { offset, bytes: bytes.len() as u32, min, max, crc: crc32fast::hash(&bytes) });
-        offset += bytes.len() as u64;
     }
     let mut index = Vec::with_capacity(entries.len() * ENTRY_BYTES + 4);
     for e in &entries {
