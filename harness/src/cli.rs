@@ -162,10 +162,10 @@ pub enum Preset {
     /// dense one.
     Volume,
     /// Seed 003's volumes larger than memory (issue 42): a particle field generated brick by brick
-    /// at 4096³ (64 GiB of `u8`, never whole), one at 1024³ and an MRI scan read back from brick
-    /// stores, cast ray-guided through a brick cache of 32 MiB, 128 MiB and 512 MiB, one page
+    /// at 4096³ (64 GiB of `u8`, never whole), one at 1024³, an MRI scan and a CT head read back
+    /// from brick stores, cast ray-guided through a brick cache of 32 MiB, 128 MiB and 512 MiB, one page
     /// table at a time (flat, multi-level, 64-tree, hash), along a 6-frame camera path at
-    /// 512×512: time per frame, rounds, bricks loaded, working set, hit rate, page-table bytes and
+    /// 256×256: time per frame, rounds, bricks loaded, working set, hit rate, page-table bytes and
     /// the heap held against the cache's budget; images checked against the in-core dense marcher
     /// where the volume fits.
     VolumeOoc,

@@ -204,7 +204,7 @@ fn list(what: ListWhat) {
             "  volume     seed 003's volumes: mri-ch2, mri-ch2better, marschner-lobb@256, fog@dragon:512, particles at 1024³ and 2048³ through dense, bricks, octree, vdb, tree64 at 1 / 10 / 30 / 100 % visible voxels, 1024×1024"
         );
         println!(
-            "  volume-ooc volumes larger than memory: particles at 4096³ generated brick by brick, particles at 1024³ and mri-ch2better from brick stores, through flat, multi-level, 64-tree and hash page tables and 32M / 128M / 512M caches, 6 frames at 512×512"
+            "  volume-ooc volumes larger than memory: particles at 4096³ generated brick by brick, particles at 1024³, mri-ch2better and ct-cranium from brick stores, through flat, multi-level, 64-tree and hash page tables and 32M / 128M / 512M caches, 6 frames at 256×256"
         );
         let (scaled, full) = cli::PAPER_MINUTES;
         println!(

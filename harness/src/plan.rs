@@ -67,12 +67,13 @@ pub const VOLUME_SOURCES: &[&str] = &[
     "particles@2048:192000",
 ];
 
-/// The volume-ooc preset's sources (issue 42): an MRI scan (where mricron-data is installed)
-/// and a particle field at 1024³ read back from brick stores, checked against the in-core dense
-/// marcher; and a sparse particle field at 4096³ (64 GiB of `u8`, 0.6 % of its bricks visible)
+/// The volume-ooc preset's sources (issue 42): an MRI scan and a CT head (where mricron-data and
+/// invesalius-examples are installed) and a particle field at 1024³ read back from brick stores,
+/// checked against the in-core dense marcher; and a sparse particle field at 4096³ (64 GiB of `u8`, 0.6 % of its bricks visible)
 /// generated brick by brick, never whole. The particle fields are seen through (their blobs are
 /// translucent), so a frame's working set is every visible brick in view.
-pub const VOLUME_OOC_SOURCES: &[&str] = &["mri-ch2better", "store:particles@1024:3000", "particles@4096:8000"];
+pub const VOLUME_OOC_SOURCES: &[&str] =
+    &["mri-ch2better", "ct-cranium", "store:particles@1024:3000", "particles@4096:8000"];
 
 /// The simd-parity preset's structures (issue 30): Embree and the other triangle references, then
 /// every family whose CPU kernel tests boxes or triangles in SIMD lanes (the wide BVH, the grids'

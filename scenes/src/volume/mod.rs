@@ -13,6 +13,7 @@
 //!   triangle scene (`fog@SCENE:N`, density falling with the distance to its surface) ([`fog`]).
 
 pub mod fog;
+pub mod inv3;
 pub mod nifti;
 pub mod procedural;
 pub mod raw;
@@ -140,6 +141,11 @@ pub const BUILTIN_VOLUMES: &[BuiltinVolume] = &[
         about: "Colin27 T1 MRI, 301×370×316 u8, 0.5 mm (Debian's mricron-data)",
     },
     BuiltinVolume {
+        name: "ct-cranium",
+        path: Some("/usr/share/doc/invesalius-examples/examples/Cranium.inv3"),
+        about: "ProMED CT head, 256×256×108 int16 (held as f32), 0.957×0.957×1.5 mm (Debian's invesalius-examples, GPL-2)",
+    },
+    BuiltinVolume {
         name: "marschner-lobb",
         path: None,
         about: "the Marschner–Lobb test signal at 64³ (`marschner-lobb@N` for N³)",
@@ -153,7 +159,13 @@ pub fn is_volume(name: &str) -> bool {
         || name.starts_with("particles@")
         || name.starts_with("fog@")
         || nifti::is_nifti(Path::new(name))
+        || inv3::is_inv3(Path::new(name))
         || raw::parse_spec(name).is_some()
+}
+
+/// The Debian package that installs the built-in volume at `path`.
+pub fn package_of(path: &str) -> &'static str {
+    if path.contains("invesalius") { "invesalius-examples" } else { "mricron-data" }
 }
 
 /// `N` of `marschner-lobb@N`; `None` for another name.
@@ -183,8 +195,11 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
         return match builtin.path {
             Some(path) if !Path::new(path).exists() => Err(SceneError::NotInstalled {
                 name: name.into(),
-                detail: format!("{}; `apt-get install mricron-data` puts it at {path}", builtin.about),
+                detail: format!("{}; `apt-get install {}` puts it at {path}", builtin.about, package_of(path)),
             }),
+            Some(path) if inv3::is_inv3(Path::new(path)) => {
+                inv3::load(Path::new(path), max_bytes).map(|v| Volume { name: name.into(), ..v })
+            }
             Some(path) => nifti::load(Path::new(path), max_bytes).map(|v| Volume { name: name.into(), ..v }),
             None => procedural::marschner_lobb(procedural::MARSCHNER_LOBB_SIZE, max_bytes),
         };
@@ -208,6 +223,9 @@ pub fn load_volume(name: &str, max_bytes: u64) -> Result<Volume, SceneError> {
     }
     if nifti::is_nifti(Path::new(name)) {
         return nifti::load(Path::new(name), max_bytes);
+    }
+    if inv3::is_inv3(Path::new(name)) {
+        return inv3::load(Path::new(name), max_bytes);
     }
     Err(SceneError::UnknownScene {
         name: name.into(),

@@ -188,28 +188,33 @@ pub fn write_store(
     // Bricks are filled and encoded a batch at a time on every worker thread, then written in
     // order: a batch of bricks in memory, never the volume.
     let batch = rayon::current_num_threads() * 8;
-    // Per brick of the batch: its samples, its stored bytes, its range and their CRC.
-    let mut encoded: Vec<(Samples, Vec<u8>, (f32, f32), u32)> = Vec::new();
+    let mut encoded: Vec<Encoded> = Vec::new();
     for first in (0..grid.count()).step_by(batch) {
         let end = (first + batch).min(grid.count());
-        encoded.resize_with(end - first, || (kind.zeros(grid.samples()), Vec::new(), (0.0, 0.0), 0));
-        encoded.par_iter_mut().enumerate().try_for_each(|(j, (samples, bytes, range_of, crc))| {
-            fill(grid.brick(first + j), samples)?;
-            let (min, max) = range(samples);
+        encoded.resize_with(end - first, || Encoded {
+            samples: kind.zeros(grid.samples()),
+            bytes: Vec::new(),
+            range: (0.0, 0.0),
+            crc: 0,
+        });
+        encoded.par_iter_mut().enumerate().try_for_each(|(j, e)| {
+            fill(grid.brick(first + j), &mut e.samples)?;
+            let (min, max) = range(&e.samples);
             // A brick of one value stores none (a NaN sample is never equal: such a brick is stored).
-            let constant = min == max && (0..samples.len()).all(|k| samples.get(k).to_bits() == min.to_bits());
-            bytes.clear();
+            let constant = min == max && (0..e.samples.len()).all(|k| e.samples.get(k).to_bits() == min.to_bits());
+            e.bytes.clear();
             if !constant {
-                encode(samples, bytes);
+                encode(&e.samples, &mut e.bytes);
             }
-            *range_of = (min, max);
-            *crc = crc32fast::hash(bytes);
+            e.range = (min, max);
+            e.crc = crc32fast::hash(&e.bytes);
             Ok::<(), SceneError>(())
         })?;
-        for (_, bytes, (min, max), crc) in &encoded {
-            out.write_all(bytes).map_err(io)?;
-            entries.push(BrickEntry { offset, bytes: bytes.len() as u32, min: *min, max: *max, crc: *crc });
-            offset += bytes.len() as u64;
+        for e in &encoded {
+            out.write_all(&e.bytes).map_err(io)?;
+            let (min, max) = e.range;
+            entries.push(BrickEntry { offset, bytes: e.bytes.len() as u32, min, max, crc: e.crc });
+            offset += e.bytes.len() as u64;
         }
     }
     let mut index = Vec::with_capacity(entries.len() * ENTRY_BYTES + 4);
@@ -234,6 +239,14 @@ pub fn write_store(
     out.write_all(&header).map_err(io)?;
     out.flush().map_err(io)?;
     Ok(grid)
+}
+
+/// A brick of a batch being written: its samples, the bytes it stores, its range and their CRC.
+struct Encoded {
+    samples: Samples,
+    bytes: Vec<u8>,
+    range: (f32, f32),
+    crc: u32,
 }
 
 /// Writes the in-core `volume` as a store (for tests and for volumes a user converts once).

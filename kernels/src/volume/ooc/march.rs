@@ -26,7 +26,7 @@ use crate::volume::{TransferFunction, VolumeImage, blend, cell_at, interpolate, 
 const SLOT_RECORD_BYTES: usize = 4 + 8 + 1 + 4;
 
 /// A bound on a frame's heap per pixel: its colour (16 bytes), its ray's state between rounds
-/// ([`Pending`]), its round's outcome and the slots it read (up to 32 distinct runs of bricks in a
+/// (`Pending`), its round's outcome and the slots it read (up to 32 distinct runs of bricks in a
 /// round before the list is reallocated past 128 bytes), its request, and the order of finished rays.
 pub const FRAME_BYTES_PER_PIXEL: u64 = 16 + size_of::<Pending>() as u64 + 2 * (8 + 24 + 128) + 4 + 8;
 
