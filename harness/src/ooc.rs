@@ -22,7 +22,7 @@ use kernels::volume::ooc::cache::Eviction;
 use kernels::volume::ooc::march::{FrameStats, OocVolume};
 use kernels::volume::ooc::page_table::{Flat, Hashed, MultiLevel, PageTable, Tree64};
 use kernels::volume::{TransferFunction, VolumeImage};
-use reports::{OocCase, OocFrame, Results};
+use reports::{OocCase, OocFrame};
 use scenes::volume::store::{self, BrickSource, BrickStore};
 use scenes::{Camera, CameraSpec};
 use structures::Params;
@@ -30,7 +30,6 @@ use structures::Params;
 use crate::alloc;
 use crate::budget::Budget;
 use crate::cli::{Backend, Preset, RunArgs};
-use crate::machine;
 use crate::output::RunOutput;
 use crate::plan::Plan;
 
@@ -148,21 +147,9 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     let settings = Settings::from_params(&params)?;
     let frames = plan.frames.unwrap_or(1).max(1);
 
-    let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
-    let run_id = created.replace(['-', ':'], "").replace('T', "-").trim_end_matches('Z').to_string();
     let mut run_settings = crate::run::settings(&plan, &params, command);
     run_settings.workloads = vec!["volume-ooc".into()];
-    let results = Results {
-        schema: reports::SCHEMA.into(),
-        run_id,
-        created,
-        machine: machine::machine(),
-        git: machine::git(),
-        settings: run_settings,
-        ..Default::default()
-    };
-    let mut out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
-    eprintln!("accel-bench: writing {}", out.dir.display());
+    let mut out = crate::output::start_session_run(args, run_settings)?;
     let budget = Budget::new(args.memory_limit);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
     let started = Instant::now();

@@ -173,6 +173,25 @@ impl RunOutput {
     }
 }
 
+/// A new run's output directory for a run of one session (the volume workloads), with its
+/// results stamped now: run id, machine, git and `settings`.
+pub fn start_session_run(args: &crate::cli::RunArgs, settings: reports::Settings) -> Result<RunOutput> {
+    let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
+    let run_id = created.replace(['-', ':'], "").replace('T', "-").trim_end_matches('Z').to_string();
+    let results = Results {
+        schema: reports::SCHEMA.into(),
+        run_id,
+        created,
+        machine: crate::machine::machine(),
+        git: crate::machine::git(),
+        settings,
+        ..Default::default()
+    };
+    let out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
+    eprintln!("accel-bench: writing {}", out.dir.display());
+    Ok(out)
+}
+
 /// Opens a run's line log for appending; `fresh` empties it first.
 fn open_log(path: &Path, fresh: bool) -> Result<File> {
     OpenOptions::new()

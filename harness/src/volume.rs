@@ -14,7 +14,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use kernels::volume::{self, Histogram, TransferFunction, VolumeImage, VolumeStructure};
-use reports::{Results, Timing, VolumeCase};
+use reports::{Timing, VolumeCase};
 use scenes::{Camera, CameraSpec, Volume};
 use structures::{Params, ms_since};
 
@@ -108,22 +108,10 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     structures.retain(|e| e.name != "dense");
     structures.insert(0, &volume::VOLUME_STRUCTURES[0]);
 
-    let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
-    let run_id = created.replace(['-', ':'], "").replace('T', "-").trim_end_matches('Z').to_string();
     let mut settings = crate::run::settings(&plan, &params, command);
     settings.workloads = vec!["volume".into()];
     settings.structures = structures.iter().map(|e| e.name.to_string()).collect();
-    let results = Results {
-        schema: reports::SCHEMA.into(),
-        run_id,
-        created,
-        machine: machine::machine(),
-        git: machine::git(),
-        settings,
-        ..Default::default()
-    };
-    let mut out = RunOutput::create(args.out.as_deref(), args.overwrite, &args.results_dir, results)?;
-    eprintln!("accel-bench: writing {}", out.dir.display());
+    let mut out = crate::output::start_session_run(args, settings)?;
     let budget = Budget::new(args.memory_limit);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
     let started = Instant::now();

@@ -429,13 +429,7 @@ pub fn speed_up_occupancy(title: &str, series: &[SpeedUps], published: &[Publish
             LogAxis { range: yr, ticks: log_ticks(yr.0, yr.1), desc: "× dense marcher", label: &label },
         )?;
         chart.draw_series(DashedLineSeries::new([(xr.0, 1.0), (xr.1, 1.0)], 6, 4, gray.stroke_width(1))).map_err(e)?;
-        for (i, s) in series.iter().enumerate() {
-            let c = color(i);
-            let mut points = s.points.clone();
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart.draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2))).map_err(e)?;
-            chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
-        }
+        draw_lines(&mut chart, series)?;
         for p in published {
             let at = (p.visible_percent, p.speed_up);
             chart.draw_series(std::iter::once(Cross::new(at, 5, gray.stroke_width(2)))).map_err(e)?;
@@ -471,15 +465,21 @@ pub fn frame_time_cache(title: &str, series: &[SpeedUps]) -> Result<String, Plot
             LogAxis { range: xr, ticks: byte_ticks(xr.0, xr.1), desc: "brick cache", label: &x_label },
             LogAxis { range: yr, ticks: log_ticks(yr.0, yr.1), desc: "ms a frame (after the first)", label: &y_label },
         )?;
-        for (i, s) in series.iter().enumerate() {
-            let c = color(i);
-            let mut points = s.points.clone();
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart.draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2))).map_err(e)?;
-            chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
-        }
+        draw_lines(&mut chart, series)?;
         Ok(())
     })
+}
+
+/// Each series as a line through its points in order of x, a dot at each, in its colour.
+fn draw_lines(chart: &mut LogLogChart<'_, '_>, series: &[SpeedUps]) -> Result<(), String> {
+    for (i, s) in series.iter().enumerate() {
+        let c = color(i);
+        let mut points = s.points.clone();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart.draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2))).map_err(e)?;
+        chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e)?;
+    }
+    Ok(())
 }
 
 /// The choices no other is both smaller and faster than, by memory.

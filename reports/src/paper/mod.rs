@@ -29,6 +29,17 @@ pub mod volumes;
 pub mod voxel_grids;
 
 use crate::claims::Sheet;
+
+/// The distinct names of `names`, each where it first appears.
+fn first_seen<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut out: Vec<&str> = Vec::new();
+    for name in names {
+        if !out.contains(&name) {
+            out.push(name);
+        }
+    }
+    out
+}
 use crate::schema::Results;
 
 use esvo::{esvo_beam, esvo_budget, esvo_scale};

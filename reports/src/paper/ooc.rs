@@ -33,13 +33,7 @@ const PUBLISHED: [(&str, &str); 4] = [
 
 /// The sources of `cases` in the order they first appear.
 pub fn sources(cases: &[OocCase]) -> Vec<&str> {
-    let mut out: Vec<&str> = Vec::new();
-    for c in cases {
-        if !out.contains(&c.source.as_str()) {
-            out.push(&c.source);
-        }
-    }
-    out
+    super::first_seen(cases.iter().map(|c| c.source.as_str()))
 }
 
 /// Per page table (and machine, in a merged run) on `source`: ms a frame after the first,

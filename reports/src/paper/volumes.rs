@@ -34,13 +34,7 @@ pub fn published() -> Vec<Published> {
 
 /// The sources of `cases` in the order they first appear.
 pub fn sources(cases: &[VolumeCase]) -> Vec<&str> {
-    let mut sources: Vec<&str> = Vec::new();
-    for c in cases {
-        if !sources.contains(&c.source.as_str()) {
-            sources.push(&c.source);
-        }
-    }
-    sources
+    super::first_seen(cases.iter().map(|c| c.source.as_str()))
 }
 
 /// Per structure (and backend, and machine in a merged run) on `source`: its speed-up over the
