@@ -31,10 +31,7 @@ use crate::alloc;
 use crate::budget::Budget;
 use crate::cli::{Backend, Preset, RunArgs};
 use crate::output::RunOutput;
-use crate::plan::Plan;
-
-/// The page tables, as `--structures` names them.
-pub const TABLES: [&str; 4] = ["flat", "multi-level", "64-tree", "hash"];
+use crate::plan::{OOC_TABLES as TABLES, Plan};
 
 /// The `volume.*` parameters of the preset and what each sets.
 pub const PARAMS: &[(&str, &str)] = &[
@@ -149,6 +146,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
 
     let mut run_settings = crate::run::settings(&plan, &params, command);
     run_settings.workloads = vec!["volume-ooc".into()];
+    // Each frame is cast and timed once.
+    (run_settings.warmup, run_settings.reps) = (0, 1);
     let mut out = crate::output::start_session_run(args, run_settings)?;
     let budget = Budget::new(args.memory_limit);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(plan.threads).build().context("starting worker threads")?;
