@@ -20,7 +20,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use kernels::volume::ooc::cache::Eviction;
 use kernels::volume::ooc::march::{FrameStats, OocVolume};
-use kernels::volume::ooc::page_table::{Flat, Hashed, MultiLevel, PageTable, Tree64};
+use kernels::volume::ooc::page_table::{PageTable, SCHEMES as TABLES, WithTable, with_scheme};
 use kernels::volume::{TransferFunction, VolumeImage};
 use reports::{OocCase, OocFrame};
 use scenes::volume::store::{self, BrickSource, BrickStore};
@@ -31,7 +31,7 @@ use crate::alloc;
 use crate::budget::Budget;
 use crate::cli::{Backend, Preset, RunArgs};
 use crate::output::RunOutput;
-use crate::plan::{OOC_TABLES as TABLES, Plan};
+use crate::plan::Plan;
 
 /// The `volume.*` parameters of the preset and what each sets.
 pub const PARAMS: &[(&str, &str)] = &[
@@ -292,12 +292,7 @@ impl SourceRun<'_> {
                 self.bar.set_message(format!("{name}: {table}, {} of cache", size(cache_bytes)));
                 let slots = (cache_bytes / brick_bytes).max(1) as usize;
                 let run = Case { source, slots, policy: s.eviction, tf: &tf, step, cameras: &cameras, bar: self.bar };
-                let measured = match table {
-                    "flat" => run.measure(Flat::new(grid.count())),
-                    "multi-level" => run.measure(MultiLevel::new(grid.bricks)),
-                    "64-tree" => run.measure(Tree64::new(grid.bricks)),
-                    _ => run.measure(Hashed::new()),
-                }?;
+                let measured = with_scheme(table, grid.bricks, run).expect("a table the run checked")?;
                 let mismatched = oracle.as_ref().map(|o| {
                     let last = measured.images.len() - 1;
                     differing(&o.first, &measured.images[0])
@@ -460,8 +455,11 @@ struct Measured {
     overhead_bytes: u64,
 }
 
-impl Case<'_> {
-    fn measure<T: PageTable + Sync>(&self, table: T) -> Result<Measured> {
+/// The case measured through `table`.
+impl WithTable for Case<'_> {
+    type Output = Result<Measured>;
+
+    fn with<T: PageTable + Sync>(self, table: T) -> Result<Measured> {
         let base = alloc::reset_peak() as u64;
         let mut v = OocVolume::new(self.source, table, self.slots, self.policy);
         v.set_transfer_function(self.tf);

@@ -75,9 +75,6 @@ pub const VOLUME_SOURCES: &[&str] = &[
 pub const VOLUME_OOC_SOURCES: &[&str] =
     &["mri-ch2better", "ct-cranium", "store:particles@1024:3000", "particles@4096:8000"];
 
-/// The volume-ooc preset's page tables, as `--structures` names them (`crate::ooc` builds them).
-pub const OOC_TABLES: [&str; 4] = ["flat", "multi-level", "64-tree", "hash"];
-
 /// The simd-parity preset's structures (issue 30): Embree and the other triangle references, then
 /// every family whose CPU kernel tests boxes or triangles in SIMD lanes (the wide BVH, the grids'
 /// ORG, the kd-tree, the triangle octree), then the voxel octrees, whose casters are scalar.
@@ -235,7 +232,7 @@ impl Preset {
             Preset::EsvoBeam => vec!["bvh", "esvo"],
             Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "svo", "esvo", "svdag"],
             Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
-            Preset::VolumeOoc => OOC_TABLES.to_vec(),
+            Preset::VolumeOoc => kernels::volume::ooc::page_table::SCHEMES.to_vec(),
             // Its parts name their own.
             Preset::Paper => Vec::new(),
             Preset::OrgFig1 => vec!["ug", "org"],

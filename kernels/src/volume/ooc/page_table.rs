@@ -27,6 +27,28 @@ const ABSENT: u32 = u32::MAX;
 /// Virtual bricks per axis of a [`MultiLevel`] page.
 pub const PAGE: u32 = 8;
 
+/// The schemes by the names the harness and the report use.
+pub const SCHEMES: [&str; 4] = ["flat", "multi-level", "64-tree", "hash"];
+
+/// Work to do with a page table, whatever its scheme ([`with_scheme`] builds the scheme named).
+pub trait WithTable {
+    type Output;
+    fn with<T: PageTable + Sync>(self, table: T) -> Self::Output;
+}
+
+/// `work` done with an empty table of the scheme `name` (one of [`SCHEMES`]) over a grid of
+/// `bricks` virtual bricks per axis; `None` for a name that is no scheme.
+pub fn with_scheme<W: WithTable>(name: &str, bricks: [u32; 3], work: W) -> Option<W::Output> {
+    let count = bricks.iter().map(|&b| b as usize).product();
+    Some(match name {
+        "flat" => work.with(Flat::new(count)),
+        "multi-level" => work.with(MultiLevel::new(bricks)),
+        "64-tree" => work.with(Tree64::new(bricks)),
+        "hash" => work.with(Hashed::new()),
+        _ => return None,
+    })
+}
+
 /// Virtual brick → cache slot.
 pub trait PageTable {
     /// The scheme's name, as the report shows it.
@@ -354,6 +376,22 @@ mod tests {
 
     /// Every scheme against a plain map over a random sequence of maps, remaps and unmaps on an
     /// uneven grid (blocks cut by its faces), every brick looked up after each change.
+    /// Each name of [`SCHEMES`] builds its own scheme; another builds none.
+    #[test]
+    fn every_scheme_is_built_by_its_name() {
+        struct Name;
+        impl WithTable for Name {
+            type Output = &'static str;
+            fn with<T: PageTable + Sync>(self, table: T) -> &'static str {
+                table.name()
+            }
+        }
+        for scheme in SCHEMES {
+            assert_eq!(with_scheme(scheme, [5, 6, 7], Name), Some(scheme));
+        }
+        assert_eq!(with_scheme("octree", [5, 6, 7], Name), None);
+    }
+
     #[test]
     fn every_scheme_maps_every_brick_as_a_plain_map_does() {
         let bricks = [13u32, 9, 17];
