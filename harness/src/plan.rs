@@ -149,6 +149,16 @@ impl Preset {
                 (vec!["simd=scalar".into()], Some("scalar".into())),
                 (vec!["org.packet=frustum".into()], Some("packets".into())),
             ],
+            // Seed 003's stackless kd-tree walks beside the stack walk (issue 43): kd-restart and
+            // Popov et al.'s ropes in Table 1; ropes in the default and ci matrices.
+            (Preset::OrgTable1, "kdtree") => vec![
+                (Vec::new(), None),
+                (vec!["kdtree.traversal=restart".into()], Some("restart".into())),
+                (vec!["kdtree.traversal=ropes".into()], Some("ropes".into())),
+            ],
+            (Preset::Default | Preset::Ci, "kdtree") => {
+                vec![(Vec::new(), None), (vec!["kdtree.traversal=ropes".into()], Some("ropes".into()))]
+            }
             (Preset::SimdParity, "kdtree" | "octree") => {
                 vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))]
             }
@@ -208,7 +218,15 @@ impl Preset {
                     [Some(at(l, &["esvo.contours=off"], None)), contours].into_iter().flatten()
                 })
                 .collect(),
-            (Preset::VoxelGrids, "brickmap" | "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
+            // The brickmap's top grid row-major and in Morton order (issue 43) where the top grid
+            // is 8 MiB (1024³), 64 MiB (2048³) and 512 MiB (4096³): around and past the caches.
+            (Preset::VoxelGrids, "brickmap") => VOXEL_GRID_LEVELS
+                .flat_map(|l| {
+                    let morton = (l <= 12).then(|| at(l, &["brickmap.order=morton"], Some("morton")));
+                    [Some(at(l, &[], None)), morton].into_iter().flatten()
+                })
+                .collect(),
+            (Preset::VoxelGrids, "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
                 .chain((9..=11).map(|l| at(l, &["svdag.leaves=bricks"], Some("bricks"))))

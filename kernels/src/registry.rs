@@ -117,7 +117,7 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "kdtree",
         family: "triangle",
         summary: "SAH kd-tree (Wald & Havran 2006): O(N log N) event sweep, perfect splits, 8-byte nodes, \
-                  front-to-back stack traversal or kd-restart (kdtree.traversal=restart)",
+                  front-to-back stack traversal, kd-restart (kdtree.traversal=restart) or ropes (=ropes, Popov et al. 2007)",
         params: &structures::kdtree::KdParams::KEYS,
         check: |p| structures::kdtree::KdParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::kdtree::KdTree::build(input)?)),
@@ -230,9 +230,10 @@ pub static STRUCTURES: &[StructureEntry] = &[
     StructureEntry {
         name: "brickmap",
         family: "voxel",
-        summary: "brickmap (van Wingerden 2015): dense top grid of pointers to 8³ bit bricks, two-level DDA; --levels L",
-        params: &["voxel.levels"],
-        check: |p| structures::brickmap::level_param(p).map(drop),
+        summary: "brickmap (van Wingerden 2015): dense top grid of pointers to 8³ bit bricks (row-major, or Morton order: \
+                  brickmap.order=morton), two-level DDA; --levels L",
+        params: &structures::brickmap::KEYS,
+        check: |p| structures::brickmap::level_param(p).and(structures::brickmap::order_param(p)).map(drop),
         build: |input| Ok(Box::new(structures::brickmap::Brickmap::build(input)?)),
         available: always,
     },

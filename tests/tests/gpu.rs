@@ -248,7 +248,8 @@ fn svdag_temporal_frames() {
 }
 
 /// The hierarchical voxel grids' switches beyond the defaults the per-scene test builds with: the
-/// VDB's compact tables, coalesced skipping and other splits, the 64-tree's DAG; and every one's
+/// VDB's compact tables, coalesced skipping and other splits, the 64-tree's DAG, the brickmap's
+/// Morton-ordered top grid; and every one's
 /// words split over several bindings, so the generated accessors' chunking is exercised. The
 /// GPU runs the same DDA as the CPU, so hits must agree exactly.
 #[test]
@@ -256,13 +257,14 @@ fn voxel_grid_variants() {
     let Some(ctx) = context_for_tests("gpu::voxel_grid_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 6] = [
+    let variants: [(&str, &str, &[&str]); 7] = [
         ("vdb-compact", "vdb", &["vdb.tables=compact"]),
         ("vdb-block", "vdb", &["vdb.tables=compact", "vdb.skip=block"]),
         ("vdb-3333", "vdb", &["vdb.log2=3,3,3,3", "vdb.skip=block"]),
         ("vdb-433", "vdb", &["vdb.log2=4,3,3", "vdb.tables=dense"]),
         ("tree64-dag", "tree64", &["tree64.dag=on"]),
         ("brickmap", "brickmap", &[]),
+        ("brickmap-morton", "brickmap", &["brickmap.order=morton"]),
     ];
     let mut failures = Vec::new();
     for name in ["bunny", "dragon-11k", "menger", "room"] {
@@ -311,8 +313,8 @@ fn voxel_grid_variants() {
     assert!(failures.is_empty(), "hierarchical grid variants differ from the CPU:\n{}", failures.join("\n"));
 }
 
-/// The kd-tree's and the triangle octree's switches beyond their defaults: kd-restart (with its
-/// fall-back to the stack walk), the kd-tree without perfect splits, and the octree with
+/// The kd-tree's and the triangle octree's switches beyond their defaults: kd-restart and ropes
+/// (each with its fall-back to the stack walk), the kd-tree without perfect splits, and the octree with
 /// bounding-box lists, without mailboxing, and with one triangle per leaf. The GPU must also take
 /// the CPU's steps: the counted steps per ray are equal.
 #[test]
@@ -320,8 +322,9 @@ fn kdtree_and_octree_variants() {
     let Some(ctx) = context_for_tests("gpu::kdtree_and_octree_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 5] = [
+    let variants: [(&str, &str, &[&str]); 6] = [
         ("kd-restart", "kdtree", &["kdtree.traversal=restart"]),
+        ("kd-ropes", "kdtree", &["kdtree.traversal=ropes"]),
         ("kd-nopsplit", "kdtree", &["kdtree.perfect_splits=off"]),
         ("oct-bbox", "octree", &["octree.cell_test=bbox"]),
         ("oct-nomail", "octree", &["octree.mailbox=off"]),

@@ -1,7 +1,8 @@
 //! The SAH kd-tree (issue 29): its nearest hit equals brute force's on ≥ 10,000 rays per built-in
 //! scene (axis-parallel, through vertices, along edges, from inside), with perfect splits and
-//! without, with the stack walk and with kd-restart; its SAH cost is within 5 % of an independent O(N²) greedy SAH build's on small scenes;
-//! `validate` rejects corrupted nodes; bad parameters are refused.
+//! without, with the stack walk, kd-restart and ropes (every rope checked by `validate` against a
+//! neighbour search that does not use the tree); its SAH cost is within 5 % of an independent O(N²) greedy SAH build's on small scenes;
+//! `validate` rejects corrupted nodes and ropes; bad parameters are refused.
 
 use std::sync::Arc;
 
@@ -9,7 +10,7 @@ use glam::Vec3;
 use scenes::Triangle;
 use structures::kdtree::{KdParams, KdTree};
 use structures::{BuildInput, Params};
-use tests::{brute_force_answers, compare_with_answers, ray_set};
+use tests::{TestRay, brute_force_answers, compare_with_answers, ray_set};
 
 const RAYS_PER_SCENE: usize = 10_002;
 
@@ -24,7 +25,8 @@ fn check_scene(name: &str) {
     let triangles = scene.triangles();
     let rays = ray_set(&scene, &triangles, RAYS_PER_SCENE, 0x6B ^ name.len() as u64);
     let answers = brute_force_answers(&triangles, &rays);
-    let variants: [&[&str]; 3] = [&[], &["kdtree.perfect_splits=off"], &["kdtree.traversal=restart"]];
+    let variants: [&[&str]; 4] =
+        [&[], &["kdtree.perfect_splits=off"], &["kdtree.traversal=restart"], &["kdtree.traversal=ropes"]];
     for params in variants {
         let tree = build(&scene, &triangles, params);
         tree.validate().unwrap_or_else(|e| panic!("{name} {params:?}: invalid kd-tree: {e}"));
@@ -180,6 +182,124 @@ fn validate_rejects_corrupted_nodes() {
     ];
     for (what, corrupt) in corruptions {
         let mut bad = build(&scene, &triangles, &[]);
+        corrupt(&mut bad);
+        assert!(bad.validate().is_err(), "{what}: accepted");
+    }
+}
+
+/// Rays the tree's own geometry makes hard, for each walk: lying in a split plane (a leaf's low
+/// face, inside the root cell), aimed at a leaf box's corner (three planes crossed at once) and
+/// at the middle of one of its edges (two at once), from outside the scene and from inside it.
+/// These are the rays kd-restart and ropes hand to the stack walk, and the ones a wrong tie rule
+/// would lose. Every walk's nearest hit equals brute force's.
+#[test]
+fn rays_in_split_planes_and_through_leaf_corners_and_edges() {
+    for name in ["teapot", "room", "city", "stadium"] {
+        let scene = scenes::load_scene(name).expect("scene");
+        let triangles = scene.triangles();
+        let ropes = build(&scene, &triangles, &["kdtree.traversal=ropes"]);
+        let (root_lo, root_hi) = ropes.bounds;
+        let (centre, diag) = ((root_lo + root_hi) * 0.5, (root_hi - root_lo).length().max(1e-3));
+        let mut state = 0x2545_F491_4F6C_DD1Du64 ^ name.len() as u64;
+        let mut unit = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut rays = Vec::new();
+        let stride = (ropes.leaves.len() / 700).max(1);
+        for leaf in ropes.leaves.iter().step_by(stride) {
+            let (lo, hi) = (Vec3::from_array(leaf.min), Vec3::from_array(leaf.max));
+            let pick = |bits: u32| {
+                Vec3::new(
+                    if bits & 1 == 0 { lo.x } else { hi.x },
+                    if bits & 2 == 0 { lo.y } else { hi.y },
+                    if bits & 4 == 0 { lo.z } else { hi.z },
+                )
+            };
+            let corner = pick((unit() * 8.0) as u32);
+            let axis = ((unit() * 3.0) as usize).min(2);
+            let mut edge = pick((unit() * 8.0) as u32);
+            edge[axis] = (lo[axis] + hi[axis]) * 0.5;
+            let outside = centre + Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vec3::X) * diag;
+            let inside = root_lo + (root_hi - root_lo) * Vec3::new(unit(), unit(), unit());
+            for (kind, from, to) in [
+                ("corner", outside, corner),
+                ("corner", inside, corner),
+                ("edge", outside, edge),
+                ("edge", inside, edge),
+            ] {
+                let dir = (to - from).normalize_or_zero();
+                if dir != Vec3::ZERO {
+                    rays.push(TestRay { kind, ray: scenes::Ray::new(from, dir) });
+                }
+            }
+            // In the plane of the leaf's low face on `axis`, where that face is a split plane.
+            if lo[axis] > root_lo[axis] {
+                let mut origin = root_lo + (root_hi - root_lo) * Vec3::new(unit(), unit(), unit());
+                origin[axis] = lo[axis];
+                let mut dir = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5);
+                dir[axis] = 0.0;
+                let dir = dir.normalize_or_zero();
+                if dir != Vec3::ZERO {
+                    rays.push(TestRay { kind: "in a split plane", ray: scenes::Ray::new(origin, dir) });
+                    rays.push(TestRay { kind: "in a split plane", ray: scenes::Ray::new(origin - dir * diag, dir) });
+                }
+            }
+        }
+        let answers = brute_force_answers(&triangles, &rays);
+        for traversal in ["stack", "restart", "ropes"] {
+            let param = format!("kdtree.traversal={traversal}");
+            let tree = build(&scene, &triangles, &[param.as_str()]);
+            let bad = compare_with_answers(&tree, &rays, &answers);
+            assert!(
+                bad.is_empty(),
+                "{name} {traversal}: {} of {} rays disagree with brute force; first: {:?}",
+                bad.len(),
+                rays.len(),
+                &bad[..bad.len().min(3)]
+            );
+        }
+    }
+}
+
+/// Each wrong rope, box or record the rope check must catch, on a tree with ropes.
+#[test]
+fn validate_rejects_corrupted_ropes() {
+    use structures::kdtree::layout::{NO_ROPE, rope_slot};
+    let scene = scenes::load_scene("teapot").expect("teapot");
+    let triangles = scene.triangles();
+    let tree = build(&scene, &triangles, &["kdtree.traversal=ropes"]);
+    tree.validate().expect("as built");
+    // A leaf record with a rope to an inner node (not pushed down as far as it goes) and one
+    // with a rope into the open.
+    let (k, slot) = tree
+        .leaves
+        .iter()
+        .enumerate()
+        .find_map(|(k, l)| {
+            (0..6).find(|&s| l.ropes[s] != NO_ROPE && !tree.nodes[l.ropes[s] as usize].is_leaf()).map(|s| (k, s))
+        })
+        .expect("a rope to an inner node");
+    let inner = tree.leaves[k].ropes[slot] as usize;
+    let outside = tree.leaves.iter().position(|l| l.ropes.contains(&NO_ROPE)).expect("a leaf on the boundary");
+    let inner_child = tree.nodes[inner].first_child() as u32;
+    type Corruption = Box<dyn Fn(&mut KdTree)>;
+    let corruptions: [(&str, Corruption); 6] = [
+        ("rope to the root", Box::new(move |t| t.leaves[k].ropes[slot] = 0)),
+        ("rope to one child of the tightest node", Box::new(move |t| t.leaves[k].ropes[slot] = inner_child)),
+        ("rope cut", Box::new(move |t| t.leaves[k].ropes[slot] = NO_ROPE)),
+        (
+            "rope out of the root cell",
+            Box::new(move |t| {
+                let s = t.leaves[outside].ropes.iter().position(|&r| r == NO_ROPE).expect("open face");
+                t.leaves[outside].ropes[s] = 1;
+            }),
+        ),
+        ("leaf box moved", Box::new(move |t| t.leaves[k].max[0] += 1.0)),
+        ("ropes swapped", Box::new(move |t| t.leaves[k].ropes.swap(rope_slot(0, false), rope_slot(0, true)))),
+    ];
+    for (what, corrupt) in corruptions {
+        let mut bad = build(&scene, &triangles, &["kdtree.traversal=ropes"]);
         corrupt(&mut bad);
         assert!(bad.validate().is_err(), "{what}: accepted");
     }

@@ -172,7 +172,7 @@ fn the_reference_budget_stops_refinement_not_the_build() {
     assert!(bad.is_empty(), "{} rays disagree; first: {:?}", bad.len(), bad.first());
 }
 
-/// Primary renders of the canonical cameras: the kd-tree (stack walk and kd-restart) and the
+/// Primary renders of the canonical cameras: the kd-tree (stack walk, kd-restart, ropes) and the
 /// octree give the reference BVH's hits bit for bit wherever the watertight test decides the same
 /// triangle — the same hit or miss on every pixel, the same `t` where the same triangle is hit —
 /// and where another triangle is hit, it is hit at the same `t` within the tie tolerance (a
@@ -180,9 +180,10 @@ fn the_reference_budget_stops_refinement_not_the_build() {
 #[test]
 fn primary_renders_equal_the_bvh() {
     use kernels::cpu::render::{ShadeContext, Workload, render};
-    let variants: [(&str, &[&str]); 4] = [
+    let variants: [(&str, &[&str]); 5] = [
         ("kdtree", &[]),
         ("kdtree", &["kdtree.traversal=restart"]),
+        ("kdtree", &["kdtree.traversal=ropes"]),
         ("octree", &[]),
         ("octree", &["octree.cell_test=bbox", "octree.mailbox=off"]),
     ];

@@ -261,7 +261,7 @@ mod grids {
                 assert_same(&oracle, &copied, &format!("{what}: layout=blocks against layout=refs"));
             }
         }
-        for traversal in ["stack", "restart"] {
+        for traversal in ["stack", "restart", "ropes"] {
             let params = Params::parse([format!("kdtree.traversal={traversal}").as_str()]).expect("parses");
             let input = BuildInput { scene: &scene, triangles: triangles.clone(), params: &params };
             let mut kd = KdTree::build(&input).unwrap_or_else(|e| panic!("{name} kdtree: {e}"));
@@ -342,6 +342,8 @@ fn every_triangle_kernel_gives_ties_to_the_smaller_index() {
         ("kdtree", &["simd=scalar"]),
         ("kdtree", &["kdtree.traversal=restart"]),
         ("kdtree", &["kdtree.traversal=restart", "simd=scalar"]),
+        ("kdtree", &["kdtree.traversal=ropes"]),
+        ("kdtree", &["kdtree.traversal=ropes", "simd=scalar"]),
     ];
     let wrong: Vec<String> = cases
         .iter()

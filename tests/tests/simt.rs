@@ -18,6 +18,7 @@ const TRACED: &[(&str, &[&str])] = &[
     ("org", &[]),
     ("kdtree", &[]),
     ("kdtree", &["kdtree.traversal=restart"]),
+    ("kdtree", &["kdtree.traversal=ropes"]),
     ("octree", &[]),
     ("octree", &["octree.mailbox=off"]),
     ("svo", &["voxel.levels=8"]),

@@ -77,6 +77,7 @@ pub fn vdb(v: &Vdb) -> GpuProgram<'_> {
 pub fn brickmap(b: &Brickmap) -> GpuProgram<'_> {
     let mut p = common(&b.grid, b.is_empty(), &b.occupied, &b.levels);
     p.push(b.side);
+    p.push(u32::from(b.order == structures::voxel::morton::CellOrder::Morton));
     GpuProgram {
         label: "brickmap",
         wgsl: BRICKMAP_WGSL,

@@ -6,16 +6,18 @@
 use std::time::Instant;
 
 use super::layout::{BRICK_SHIFT, BRICK_WORDS, top_index};
-use super::{Brickmap, BrickmapStats, level_param};
+use super::{Brickmap, BrickmapStats, level_param, order_param};
+use crate::voxel::morton::{CellOrder, Morton};
 use crate::voxel::wide::{StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
 use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 use crate::{BuildError, BuildInput};
 
 pub fn build(input: &BuildInput) -> Result<Brickmap, BuildError> {
     let level = level_param(input.params)?;
+    let order = order_param(input.params)?;
     let start = Instant::now();
     let grid = VoxelGrid::fit(input.scene.bounds(), level);
-    let (mut sink, shape) = Sink::new(level);
+    let (mut sink, shape) = Sink::new(level, order);
     let (counts, voxelize) = stream_voxelization(input.scene, &grid, &shape, &mut sink);
     Ok(finish(grid, sink, counts, voxelize, start))
 }
@@ -23,7 +25,7 @@ pub fn build(input: &BuildInput) -> Result<Brickmap, BuildError> {
 /// The same brickmap from the canonical octree (the tests' second path to the same words).
 pub fn from_octree(tree: &Octree) -> Brickmap {
     let start = Instant::now();
-    let (mut sink, shape) = Sink::new(tree.grid.level);
+    let (mut sink, shape) = Sink::new(tree.grid.level, CellOrder::Linear);
     let counts = feed_from_octree(tree, &shape, &mut sink);
     finish(tree.grid, sink, counts, VoxelizeStats::default(), start)
 }
@@ -43,6 +45,8 @@ fn finish(grid: VoxelGrid, sink: Sink, counts: StreamCounts, voxelize: VoxelizeS
     Brickmap {
         grid,
         side: sink.side,
+        order: sink.order,
+        morton: Morton::detect(),
         top: sink.top,
         bricks: sink.bricks,
         occupied,
@@ -56,15 +60,16 @@ fn finish(grid: VoxelGrid, sink: Sink, counts: StreamCounts, voxelize: VoxelizeS
 /// The build's sink: a brick's handle is its index; a top entry writes its cell.
 struct Sink {
     side: u32,
+    order: CellOrder,
     top: Vec<u32>,
     bricks: Vec<u32>,
 }
 
 impl Sink {
-    fn new(level: u32) -> (Self, WideShape) {
+    fn new(level: u32, order: CellOrder) -> (Self, WideShape) {
         let side = 1u32 << level.saturating_sub(BRICK_SHIFT);
         let cells = (side as usize).pow(3);
-        (Self { side, top: vec![0; cells], bricks: Vec::new() }, WideShape::new(level, vec![BRICK_SHIFT]))
+        (Self { side, order, top: vec![0; cells], bricks: Vec::new() }, WideShape::new(level, vec![BRICK_SHIFT]))
     }
 }
 
@@ -82,6 +87,11 @@ impl WideSink for Sink {
     }
 
     fn top(&mut self, code: u64, brick: u32) {
-        self.top[top_index(self.side, morton::decode(code))] = brick + 1;
+        // The stream meets top cells by their Morton code: in Morton order that is the index.
+        let index = match self.order {
+            CellOrder::Linear => top_index(self.side, morton::decode(code)),
+            CellOrder::Morton => code as usize,
+        };
+        self.top[index] = brick + 1;
     }
 }

@@ -1,7 +1,7 @@
 //! The brickmap's words, exactly as the CPU kernel reads them and the GPU receives them (van
 //! Wingerden 2015's layered grid, two layers):
-//! - `top`: `(2^L / 8)³` words, x fastest ([`top_index`]): 0 for an empty cell, else the cell's
-//!   brick index plus one;
+//! - `top`: `(2^L / 8)³` words, x fastest ([`top_index`]) or at each cell's Morton index
+//!   (`brickmap.order=morton`): 0 for an empty cell, else the cell's brick index plus one;
 //! - `bricks`: [`BRICK_WORDS`] words per brick, the 512-bit voxel mask, bit = the voxel's local
 //!   Morton code (x in bit 0), in the order the voxeliser's stream met the cells.
 

@@ -1,6 +1,7 @@
 //! `brickmap` — the plain two-level hierarchical uniform grid on voxels (van Wingerden, "Real-time
 //! Ray tracing and Editing of Large Voxel Scenes", MSc thesis, Utrecht 2015): a dense top grid
-//! of 32-bit brick pointers over 8³-voxel cells, and for every occupied cell a brick of 512
+//! of 32-bit brick pointers over 8³-voxel cells (row-major, or in Morton order with
+//! `brickmap.order=morton`, seed 003 / issue 43), and for every occupied cell a brick of 512
 //! voxel bits. The top DDA steps over empty cells whole; voxel steps happen only inside bricks.
 //! It is the voxel twin of the triangle grids' `rg2`: no tree, one level of indirection.
 //!
@@ -21,6 +22,7 @@ use serde::Serialize;
 use serde_json::json;
 
 use crate::svo::voxel_params_json;
+use crate::voxel::morton::{CellOrder, Morton};
 use crate::voxel::wide::{DdaLevels, WideShape};
 use crate::voxel::{VoxelGrid, VoxelizeStats};
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
@@ -47,6 +49,11 @@ pub struct Brickmap {
     pub grid: VoxelGrid,
     /// The top grid's cells per axis.
     pub side: u32,
+    /// Where each top cell's entry sits (`brickmap.order`): x fastest, or at the cell's Morton
+    /// index (the side is a power of two, so the Morton table is exactly as large).
+    pub order: CellOrder,
+    /// The encoder a Morton-ordered top grid is indexed with (`pdep` or the table).
+    pub morton: Morton,
     /// The top grid and the bricks (see [`layout`]).
     pub top: Vec<u32>,
     pub bricks: Vec<u32>,
@@ -57,6 +64,14 @@ pub struct Brickmap {
     pub voxels: u64,
     pub stats: BrickmapStats,
     pub voxelize: VoxelizeStats,
+}
+
+/// The brickmap's parameters besides the level.
+pub const KEYS: [&str; 2] = ["voxel.levels", "brickmap.order"];
+
+/// The top grid's order (`brickmap.order`: `linear`, the default, or `morton`).
+pub fn order_param(params: &crate::Params) -> Result<CellOrder, BuildError> {
+    params.choice("brickmap.order", CellOrder::Linear, &CellOrder::NAMES)
 }
 
 /// The voxel level of a build (`--levels`), checked against the brickmap's limit.
@@ -87,10 +102,13 @@ impl Brickmap {
         WideShape::new(self.grid.level, vec![BRICK_SHIFT])
     }
 
-    /// The top grid's index of cell `c`.
+    /// The top grid's index of cell `c`, in the build's [`CellOrder`].
     #[inline(always)]
     pub fn top_index(&self, c: [u32; 3]) -> usize {
-        layout::top_index(self.side, c)
+        match self.order {
+            CellOrder::Linear => layout::top_index(self.side, c),
+            CellOrder::Morton => self.morton.encode(c[0], c[1], c[2]) as usize,
+        }
     }
 }
 
@@ -117,6 +135,8 @@ impl Structure for Brickmap {
         v["brickmap"] = json!({
             "stats": self.stats,
             "brick_side": 1u32 << BRICK_SHIFT,
+            "order": self.order.name(),
+            "morton_encoder": (self.order == CellOrder::Morton).then(|| self.morton.name()),
             "level_sides": self.shape().dda_shifts().iter().map(|s| 1u64 << s).collect::<Vec<_>>(),
             "bytes_per_voxel": memory.total_bytes() as f64 / self.voxels.max(1) as f64,
             "bytes_per_voxel_by_component": crate::memory::per_voxel(&memory, self.voxels),

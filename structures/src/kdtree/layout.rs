@@ -8,6 +8,9 @@
 //! | `data` | split position (`f32` bits) | first index into the reference list |
 //!
 //! The first child holds the half-space below the split plane, the second the one above.
+//!
+//! With ropes (`kdtree.traversal=ropes`, Popov et al. 2007) a leaf's `data` is instead the index
+//! of its [`RopeLeaf`], which holds the first reference index, the leaf's box and its six ropes.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -66,3 +69,29 @@ impl KdNode {
         self.data as usize
     }
 }
+
+/// No neighbour: the face lies on the root cell's boundary.
+pub const NO_ROPE: u32 = u32::MAX;
+
+/// The rope slot of a leaf's face: `2·axis` for its low face, `2·axis + 1` for its high face.
+pub const fn rope_slot(axis: usize, high: bool) -> usize {
+    2 * axis + high as usize
+}
+
+/// A leaf as the rope walk reads it (Popov, Günther, Seidel & Slusallek, "Stackless KD-Tree
+/// Traversal for High Performance GPU Ray Tracing", Eurographics 2007, §3): the leaf's box, from
+/// which the walk finds the face a ray leaves by, and per face ([`rope_slot`]) the index of the
+/// smallest node whose cell holds that whole face on its other side, or [`NO_ROPE`]. 52 bytes: the
+/// box and the ropes (48) are what a stackless walk pays per leaf; `first_ref` moved here from
+/// the leaf's node, whose `data` points to this record.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RopeLeaf {
+    pub min: [f32; 3],
+    /// The leaf's first index into the reference list (its count stays in the node's `flags`).
+    pub first_ref: u32,
+    pub max: [f32; 3],
+    pub ropes: [u32; 6],
+}
+
+const _: () = assert!(size_of::<RopeLeaf>() == 52);

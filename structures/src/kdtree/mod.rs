@@ -9,14 +9,18 @@
 //! [`MAX_DEPTH`]); `leaf_size`, a node of at most this many triangles is a leaf (1: the SAH alone
 //! decides); `perfect_splits` (`on`); `traversal`, how the kernels walk the tree: `stack` (a stack
 //! of far children, the default) or `restart` (kd-restart, Foley & Sugerman 2005, seed 003: no
-//! stack; after each leaf the ray restarts from the root past that leaf). `simd` (`auto`, `scalar`,
-//! `sse4`): a leaf's triangles tested four at a time, as the grids' cells are.
+//! stack; after each leaf the ray restarts from the root past that leaf) or `ropes` (Popov et al.
+//! 2007, seed 003: no stack; each leaf stores its box and a rope per face to the neighbouring
+//! subtree, `ropes.rs`, and the ray follows the rope of the face it leaves by). `simd` (`auto`,
+//! `scalar`, `sse4`): a leaf's triangles tested four at a time, as the grids' cells are.
 
 mod build;
 pub mod clip;
 pub mod layout;
+mod ropes;
 mod validate;
 
+use std::ops::Range;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -24,7 +28,7 @@ use scenes::Triangle;
 
 use crate::simd::{Resolved, SimdChoice};
 use crate::{BuildError, BuildInput, MemoryReport, Params, Structure};
-pub use layout::KdNode;
+pub use layout::{KdNode, RopeLeaf};
 
 /// Deepest tree the traversal stacks hold; the builder never goes deeper (`max_depth` ≤ this).
 pub const MAX_DEPTH: u32 = 64;
@@ -51,6 +55,17 @@ pub enum KdTraversal {
     Stack,
     /// kd-restart (Foley & Sugerman 2005): no stack; each leaf's exit restarts the descent.
     Restart,
+    /// Ropes (Popov et al. 2007): no stack; a leaf's exit face's rope leads to the next subtree.
+    Ropes,
+}
+
+impl KdTraversal {
+    pub const NAMES: [(&'static str, KdTraversal); 3] =
+        [("stack", KdTraversal::Stack), ("restart", KdTraversal::Restart), ("ropes", KdTraversal::Ropes)];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES.iter().find(|(_, t)| *t == self).map_or("stack", |(name, _)| name)
+    }
 }
 
 impl KdParams {
@@ -73,11 +88,7 @@ impl KdParams {
             max_depth: params.get("kdtree.max_depth", 0)?,
             leaf_size: params.get("kdtree.leaf_size", 1)?,
             perfect_splits: params.choice("kdtree.perfect_splits", true, &[("on", true), ("off", false)])?,
-            traversal: params.choice(
-                "kdtree.traversal",
-                KdTraversal::Stack,
-                &[("stack", KdTraversal::Stack), ("restart", KdTraversal::Restart)],
-            )?,
+            traversal: params.choice("kdtree.traversal", KdTraversal::Stack, &KdTraversal::NAMES)?,
             simd: SimdChoice::from_params(params)?.resolve(&crate::simd::FOUR_LANES)?,
         };
         let bad =
@@ -121,6 +132,9 @@ pub struct KdTree {
     pub params: KdParams,
     /// Longest root-to-leaf path, in nodes.
     pub depth: usize,
+    /// With ropes (`traversal=ropes`): each leaf's record, which its node's `data` indexes;
+    /// otherwise empty.
+    pub leaves: Vec<RopeLeaf>,
 }
 
 impl KdTree {
@@ -137,7 +151,7 @@ impl KdTree {
             });
         }
         let tree = build::build_tree(&triangles, bounds, &params, max_depth);
-        let (nodes, refs, depth) = flatten(tree);
+        let (mut nodes, refs, depth) = flatten(tree);
         if nodes.len() as u64 > u64::from(layout::MAX_PAYLOAD) || refs.len() as u64 > u64::from(u32::MAX) {
             return Err(BuildError::Limit {
                 structure: "kdtree",
@@ -148,9 +162,23 @@ impl KdTree {
                 ),
             });
         }
-        let tree = Self { nodes, refs, bounds, triangles, params, depth };
+        let leaves = match params.traversal {
+            KdTraversal::Ropes => ropes::build_ropes(&mut nodes, bounds),
+            KdTraversal::Stack | KdTraversal::Restart => Vec::new(),
+        };
+        let tree = Self { nodes, refs, bounds, triangles, params, depth, leaves };
         debug_assert!(tree.validate().is_ok());
         Ok(tree)
+    }
+
+    /// The indices into `refs` of a leaf's triangles: from its node, or with ropes from its record.
+    #[inline(always)]
+    pub fn leaf_refs(&self, leaf: &KdNode) -> Range<usize> {
+        let first = match self.params.traversal {
+            KdTraversal::Ropes => self.leaves[leaf.first_ref()].first_ref as usize,
+            KdTraversal::Stack | KdTraversal::Restart => leaf.first_ref(),
+        };
+        first..first + leaf.count()
     }
 
     /// The tree's SAH cost (Wald & Havran §3): `ct` per inner node and `ci` per reference in a
@@ -213,9 +241,16 @@ impl Structure for KdTree {
     }
 
     fn memory(&self) -> MemoryReport {
-        MemoryReport::new(self.nodes.len() as u64, self.refs.len() as u64)
+        let report = MemoryReport::new(self.nodes.len() as u64, self.refs.len() as u64)
             .with("nodes", (self.nodes.len() * size_of::<KdNode>()) as u64)
-            .with("references", (self.refs.len() * size_of::<u32>()) as u64)
+            .with("references", (self.refs.len() * size_of::<u32>()) as u64);
+        if self.leaves.is_empty() {
+            return report;
+        }
+        // What the ropes cost apart: per leaf its box and six ropes; its reference start moved
+        // from the node into the record (the node now holds the record's index).
+        let n = self.leaves.len() as u64;
+        report.with("leaf boxes", n * 24).with("ropes", n * 24).with("leaf reference starts", n * 4)
     }
 
     fn params(&self) -> serde_json::Value {
@@ -228,7 +263,7 @@ impl Structure for KdTree {
             "max_depth": p.depth_for(self.triangles.len()),
             "leaf_size": p.leaf_size,
             "perfect_splits": if p.perfect_splits { "on" } else { "off" },
-            "traversal": match p.traversal { KdTraversal::Stack => "stack", KdTraversal::Restart => "restart" },
+            "traversal": p.traversal.name(),
             "simd": p.simd.name(),
             "depth": self.depth,
             "sah_cost": self.sah_cost(),

@@ -1,11 +1,13 @@
 //! Structural checks of a kd-tree, used by the builder (debug) and the tests.
 
-use super::{KdTree, MAX_DEPTH};
+use super::{KdTraversal, KdTree, MAX_DEPTH, ropes};
 
 impl KdTree {
     /// Checks that every inner node's children follow it and its plane lies strictly inside its
     /// cell, that every reference is in range and its triangle's box meets its leaf's cell, that
-    /// every triangle is referenced somewhere, every node is reachable and the depth is bounded.
+    /// every triangle is referenced somewhere, every node is reachable and the depth is bounded;
+    /// with ropes, that every leaf's record holds its cell and every rope its neighbours
+    /// (`ropes::validate_ropes`).
     pub fn validate(&self) -> Result<(), String> {
         let mut referenced = vec![false; self.triangles.len()];
         let mut visited = 0usize;
@@ -17,7 +19,10 @@ impl KdTree {
             }
             let n = self.nodes.get(i).ok_or_else(|| format!("node index {i} out of range"))?;
             if n.is_leaf() {
-                let range = n.first_ref()..n.first_ref() + n.count();
+                if self.params.traversal == KdTraversal::Ropes && n.first_ref() >= self.leaves.len() {
+                    return Err(format!("leaf {i}: rope record {} out of range", n.first_ref()));
+                }
+                let range = self.leaf_refs(n);
                 let refs = self.refs.get(range).ok_or_else(|| format!("leaf {i}: references out of range"))?;
                 for &r in refs {
                     let tri =
@@ -47,9 +52,15 @@ impl KdTree {
         if visited != self.nodes.len() {
             return Err(format!("{} nodes stored, {visited} reachable", self.nodes.len()));
         }
-        match referenced.iter().position(|&r| !r) {
-            Some(t) => Err(format!("triangle {t} is in no leaf")),
-            None => Ok(()),
+        if let Some(t) = referenced.iter().position(|&r| !r) {
+            return Err(format!("triangle {t} is in no leaf"));
+        }
+        match self.params.traversal {
+            KdTraversal::Ropes => ropes::validate_ropes(&self.nodes, &self.leaves, self.bounds),
+            KdTraversal::Stack | KdTraversal::Restart if !self.leaves.is_empty() => {
+                Err(format!("{} rope records without ropes", self.leaves.len()))
+            }
+            KdTraversal::Stack | KdTraversal::Restart => Ok(()),
         }
     }
 }
