@@ -367,6 +367,7 @@ pub(crate) fn timed_renders(
         steps_p99: None,
         node_visits_per_ray_mean: totals.node_visits as f64 / rays,
         steps_per_level: steps_per_level(&totals, rays),
+        leaps_per_ray_by_reach: leaps_per_ray(&totals, rays),
         prim_tests_per_ray_mean: totals.prim_tests as f64 / rays,
         hit_fraction: frame.hit_fraction(),
         rays_at_bound: totals.rays_at_bound,
@@ -423,6 +424,12 @@ fn simulate(
 pub(crate) fn steps_per_level(totals: &kernels::Counters, rays: f64) -> Vec<f64> {
     let used = totals.steps_by_level.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
     totals.steps_by_level[..used].iter().map(|&n| n as f64 / rays).collect()
+}
+
+/// Leaps per ray by reach class, up to the largest class leapt (empty where nothing leapt).
+pub(crate) fn leaps_per_ray(totals: &kernels::Counters, rays: f64) -> Vec<f64> {
+    let used = totals.leaps_by_reach.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+    totals.leaps_by_reach[..used].iter().map(|&n| n as f64 / rays).collect()
 }
 
 /// The names of the counts a kernel does not expose (see `RenderStats::uncounted`).

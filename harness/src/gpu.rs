@@ -74,6 +74,7 @@ pub fn measure(
         steps_p99: None,
         node_visits_per_ray_mean: 0.0,
         steps_per_level: Vec::new(),
+        leaps_per_ray_by_reach: Vec::new(),
         prim_tests_per_ray_mean: 0.0,
         hit_fraction: render.frame.hit_fraction(),
         rays_at_bound: render.rays_at_bound(),

@@ -12,6 +12,7 @@
 //! | `vdb` | [`cpu::vdb`] (over [`cpu::wide_dda`]) | `gpu/vdb.wgsl` (over `gpu/wide_dda.wgsl`) |
 //! | `tree64` | [`cpu::tree64`] (over [`cpu::wide_dda`]) | `gpu/tree64.wgsl` (over `gpu/wide_dda.wgsl`) |
 //! | `brickmap` | [`cpu::brickmap`] (over [`cpu::wide_dda`]) | `gpu/brickmap.wgsl` (over `gpu/wide_dda.wgsl`) |
+//! | `distfield` | [`cpu::distfield`] (over [`cpu::wide_dda`], leaping) | `gpu/distfield.wgsl` (over `gpu/wide_dda.wgsl`) |
 //! | `obvhs` | [`cpu::obvhs`] (the crate's own BVH2 traversal) | — |
 //! | `cwbvh` | [`cpu::obvhs`] (the crate's own CWBVH traversal) | `gpu/cwbvh.wgsl` |
 //! | `embree` | [`cpu::embree`] (Embree 3, loaded at run time) | — |
@@ -40,7 +41,7 @@ pub use registry::{
     Accel, QUERY_STRUCTURES, QueryEntry, STRUCTURES, StructureEntry, build_structure, find_query_structure,
     find_structure, param_keys, structure_check, structure_family, structure_names,
 };
-pub use stats::{Counters, LEVEL_STEPS, MAX_STEPS, NoStats, Stats, StepKind};
+pub use stats::{Counters, LEAP_REACHES, LEVEL_STEPS, MAX_STEPS, NoStats, Stats, StepKind};
 
 /// The nearest intersection found along a ray (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]

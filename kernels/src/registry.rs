@@ -238,6 +238,17 @@ pub static STRUCTURES: &[StructureEntry] = &[
         available: always,
     },
     StructureEntry {
+        name: "distfield",
+        family: "voxel",
+        summary: "distance-field brickmap (seed 003; Cohen & Sheffer 1994, Deakin & Knackstedt 2019): the brickmap's \
+                  top grid with each empty cell's Chebyshev distance to the nearest brick (8 bits, linear-time \
+                  transform), the top DDA leaping the empty cube; --levels L, distfield.cap=1..255",
+        params: &structures::distfield::KEYS,
+        check: |p| structures::distfield::level_param(p).and(structures::distfield::cap_param(p)).map(drop),
+        build: |input| Ok(Box::new(structures::distfield::Distfield::build(input)?)),
+        available: always,
+    },
+    StructureEntry {
         name: "svdag-temporal",
         family: "voxel",
         summary: "temporal SVDAG (seed 001 §4): every frame of an animated scene (--frames N) merged into one DAG, \

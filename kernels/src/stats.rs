@@ -35,6 +35,11 @@ pub trait Stats {
     /// One step over an empty cell at `level` of a hierarchy of grids (0 = its top cells): where
     /// the hierarchical DDA skips space ([`Counters::steps_by_level`]).
     fn level_step(&mut self, level: usize);
+    /// One leap of a distance field (`distfield`) out of the empty cube of top cells within
+    /// `reach − 1` of the ray's cell (`reach ≥ 2`), also counted as a level step
+    /// ([`Counters::leaps_by_reach`]).
+    #[inline(always)]
+    fn leap(&mut self, _reach: u32) {}
     /// Adds counts gathered elsewhere (a per-frame pre-pass).
     fn add(&mut self, counters: &Counters);
     /// The branch of the loop body the current step takes ([`StepKind`]), called once per
@@ -119,7 +124,14 @@ pub struct Counters {
     /// top cells first, the voxels last; the deepest levels share the last entry. Zero for
     /// every other structure.
     pub steps_by_level: [u64; LEVEL_STEPS],
+    /// A distance field's leaps by their reach `r` (the empty cube's radius plus one, in top
+    /// cells), in powers of two: entry `i` counts `2^i ≤ r < 2^(i+1)` (entry 0 stays 0: a reach
+    /// of 1 is a plain step). Zero for every other structure.
+    pub leaps_by_reach: [u64; LEAP_REACHES],
 }
+
+/// Reach classes [`Counters::leaps_by_reach`] tells apart: to 255, the 8-bit distances' largest.
+pub const LEAP_REACHES: usize = 8;
 
 /// Levels [`Counters::steps_by_level`] tells apart.
 pub const LEVEL_STEPS: usize = 8;
@@ -155,6 +167,10 @@ impl Stats for Counters {
         self.steps_by_level[level.min(LEVEL_STEPS - 1)] += 1;
     }
     #[inline(always)]
+    fn leap(&mut self, reach: u32) {
+        self.leaps_by_reach[(reach.max(1).ilog2() as usize).min(LEAP_REACHES - 1)] += 1;
+    }
+    #[inline(always)]
     fn add(&mut self, counters: &Counters) {
         *self += *counters;
     }
@@ -169,6 +185,9 @@ impl AddAssign for Counters {
         self.pops += o.pops;
         self.rays_at_bound += o.rays_at_bound;
         for (a, b) in self.steps_by_level.iter_mut().zip(o.steps_by_level) {
+            *a += b;
+        }
+        for (a, b) in self.leaps_by_reach.iter_mut().zip(o.leaps_by_reach) {
             *a += b;
         }
     }

@@ -749,6 +749,12 @@ pub struct RenderStats {
     /// structure and on the GPU.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub steps_per_level: Vec<f64>,
+    /// A distance field's (`distfield`) leaps per ray by reach, in powers of two: entry `i`
+    /// counts leaps out of an empty cube of radius `2^i − 1 … 2^(i+1) − 2` top cells (entry 0, a
+    /// plain step, stays 0), up to the largest class leapt. Empty for every other structure and
+    /// on the GPU.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub leaps_per_ray_by_reach: Vec<f64>,
     pub prim_tests_per_ray_mean: f64,
     pub hit_fraction: f64,
     /// Rays the kernel ended at its iteration bound (`kernels::MAX_STEPS`) in the counted pass;

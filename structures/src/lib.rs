@@ -21,12 +21,14 @@
 //! | [`vdb`] | OpenVDB/NanoVDB tree (root table, 5-4-3 interior nodes, mask leaves) | seed 003, issue 28 |
 //! | [`tree64`] | sparse 64-tree (4³ children, 64-bit masks), or its DAG | seed 003, issue 28 |
 //! | [`brickmap`] | two-level voxel grid: dense top grid of 8³ bit bricks | seed 003, issue 28 |
+//! | [`distfield`] | the brickmap with Chebyshev distances in its empty top cells | seed 003, issue 43 |
 //!
 //! The three hierarchical voxel grids share their shape and streamed build ([`voxel::wide`]).
 
 pub mod brickmap;
 pub mod bvh;
 pub mod bvh4;
+pub mod distfield;
 pub mod embree;
 pub mod esvo;
 pub mod grid;

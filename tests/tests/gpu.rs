@@ -249,7 +249,8 @@ fn svdag_temporal_frames() {
 
 /// The hierarchical voxel grids' switches beyond the defaults the per-scene test builds with: the
 /// VDB's compact tables, coalesced skipping and other splits, the 64-tree's DAG, the brickmap's
-/// Morton-ordered top grid; and every one's
+/// Morton-ordered top grid, the distance field with its leaps and with short ones (cap 2); and
+/// every one's
 /// words split over several bindings, so the generated accessors' chunking is exercised. The
 /// GPU runs the same DDA as the CPU, so hits must agree exactly.
 #[test]
@@ -257,7 +258,7 @@ fn voxel_grid_variants() {
     let Some(ctx) = context_for_tests("gpu::voxel_grid_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 7] = [
+    let variants: [(&str, &str, &[&str]); 9] = [
         ("vdb-compact", "vdb", &["vdb.tables=compact"]),
         ("vdb-block", "vdb", &["vdb.tables=compact", "vdb.skip=block"]),
         ("vdb-3333", "vdb", &["vdb.log2=3,3,3,3", "vdb.skip=block"]),
@@ -265,6 +266,8 @@ fn voxel_grid_variants() {
         ("tree64-dag", "tree64", &["tree64.dag=on"]),
         ("brickmap", "brickmap", &[]),
         ("brickmap-morton", "brickmap", &["brickmap.order=morton"]),
+        ("distfield", "distfield", &[]),
+        ("distfield-cap2", "distfield", &["distfield.cap=2"]),
     ];
     let mut failures = Vec::new();
     for name in ["bunny", "dragon-11k", "menger", "room"] {

@@ -1,5 +1,5 @@
 //! The hierarchical voxel grids (issue 28: `vdb` in both table modes and other splits, `tree64` as
-//! a tree and as a DAG, `brickmap`) against the octrees over the same voxelisation and the voxel
+//! a tree and as a DAG, `brickmap`, and the distance-field brickmap `distfield`) against the octrees over the same voxelisation and the voxel
 //! DDA oracle (`kernels::cpu::voxel_dda`), which walks the finest grid cell by cell:
 //!
 //! - on every built-in scene at L = 9, every variant validates, expands to exactly the
@@ -24,6 +24,7 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use scenes::{Ray, Scene};
 use structures::brickmap::{self, Brickmap};
+use structures::distfield::{self, Distfield};
 use structures::svdag::Svdag;
 use structures::svo::Svo;
 use structures::tree64::{self, Tree64, Tree64Params};
@@ -63,6 +64,7 @@ struct Grids {
     tree: Tree64,
     dag: Tree64,
     map: Brickmap,
+    field: Distfield,
 }
 
 impl Grids {
@@ -84,6 +86,7 @@ impl Grids {
             tree: tree64(&[]),
             dag: tree64(&["tree64.dag=on"]),
             map: Brickmap::build(&input(scene, &p)).unwrap_or_else(|e| panic!("{}: {e}", scene.name)),
+            field: Distfield::build(&input(scene, &p)).unwrap_or_else(|e| panic!("{}: {e}", scene.name)),
         }
     }
 
@@ -99,6 +102,7 @@ impl Grids {
         out.push(("tree64".into(), &self.tree, self.tree.levels));
         out.push(("tree64 dag".into(), &self.dag, self.dag.levels));
         out.push(("brickmap".into(), &self.map, self.map.levels));
+        out.push(("distfield".into(), &self.field, self.field.levels));
         out
     }
 
@@ -117,6 +121,8 @@ impl Grids {
         }
         brickmap::validate::validate(&self.map).unwrap_or_else(|e| panic!("{name} brickmap: {e}"));
         assert_eq!(brickmap::validate::expand(&self.map), set.codes, "{name} brickmap: expands to the voxelisation");
+        distfield::validate::validate(&self.field).unwrap_or_else(|e| panic!("{name} distfield: {e}"));
+        assert_eq!(distfield::validate::expand(&self.field), set.codes, "{name} distfield: expands to the voxels");
         assert!(self.dag.words.len() <= self.tree.words.len() && self.dag.bricks.len() <= self.tree.bricks.len());
     }
 }
@@ -213,6 +219,7 @@ fn random_rays_and_point_queries_at_level_12() {
                 assert_eq!(tree64::validate::contains(&grids.tree, c), want, "{name} tree64: point {c:?}");
                 assert_eq!(tree64::validate::contains(&grids.dag, c), want, "{name} tree64 dag: point {c:?}");
                 assert_eq!(brickmap::validate::contains(&grids.map, c), want, "{name} brickmap: point {c:?}");
+                assert_eq!(distfield::validate::contains(&grids.field, c), want, "{name} distfield: point {c:?}");
             }
         }
     }
@@ -355,6 +362,83 @@ fn validate_rejects_a_corrupted_mask_offset_and_leaf() {
     let mut broken = map.clone();
     broken.bricks[0] |= !map.bricks[0] & map.bricks[0].wrapping_add(1);
     assert!(brickmap::validate::validate(&broken).is_err(), "brickmap: an extra voxel passes");
+
+    // The distance field: a brick's cell emptied, a brick named twice, a distance one too large
+    // (a leap past a brick) and one too small, an empty cell's distance 0.
+    use distfield::layout::{EMPTY_BIT, read};
+    let field = &grids.field;
+    let first = field.top.iter().position(|&w| read(w).is_ok()).expect("an occupied cell");
+    let far = field.top.iter().position(|&w| read(w).is_err_and(|d| d >= 2)).expect("a cell two from a brick");
+    for (what, at, word) in [
+        ("an emptied brick cell", first, EMPTY_BIT | 1),
+        ("a second pointer to a brick", far, field.top[first]),
+        ("a distance too large", far, field.top[far] + 1),
+        ("a distance too small", far, field.top[far] - 1),
+        ("a distance of 0", far, EMPTY_BIT),
+    ] {
+        let mut broken = field.clone();
+        broken.top[at] = word;
+        assert!(distfield::validate::validate(&broken).is_err(), "distfield: {what} passes");
+    }
+}
+
+/// The distance field's stored distances against a brute-force chessboard distance from every
+/// empty top cell to every occupied one, on small grids of several scenes, capped and not.
+#[test]
+fn distances_equal_a_brute_force_chebyshev_distance() {
+    use distfield::layout::read;
+    for (name, level, cap) in [("bunny", 7, 255), ("city", 8, 255), ("room", 7, 3), ("menger", 8, 2), ("flat", 7, 255)]
+    {
+        let scene = load(name);
+        let cap_param = format!("distfield.cap={cap}");
+        let field = Distfield::build(&input(&scene, &params(level, &[&cap_param]))).expect("distfield");
+        let n = field.side as i64;
+        let at = |i: usize| [i as i64 % n, i as i64 / n % n, i as i64 / (n * n)];
+        let occupied: Vec<[i64; 3]> = (0..field.top.len()).filter(|&i| read(field.top[i]).is_ok()).map(at).collect();
+        assert!(!occupied.is_empty() && occupied.len() < field.top.len(), "{name}: some cells empty, some not");
+        let mut far = 0;
+        for (i, &word) in field.top.iter().enumerate() {
+            let Err(d) = read(word) else { continue };
+            let c = at(i);
+            let nearest =
+                occupied.iter().map(|o| (0..3).map(|a| (c[a] - o[a]).abs()).max().expect("3 axes")).min().expect("one");
+            assert_eq!(i64::from(d), nearest.min(cap), "{name} L={level} cap {cap}: top cell {c:?}");
+            far += usize::from(d >= 2);
+        }
+        assert!(far > 0, "{name}: no cell two or more cells from a brick: the leaps went untested");
+    }
+}
+
+/// No leap passes an occupied top cell: on the shared ray set of every built-in scene the distance
+/// field enters exactly the bricks the brickmap enters (the same descents, the same voxel steps)
+/// in no more top steps, and with `distfield.cap=1` (no distances) its counts are the brickmap's.
+#[test]
+fn leaps_enter_every_brick_the_brickmap_enters() {
+    let level = 9;
+    let mut leaps = 0u64;
+    for name in scenes::BUILTIN_SCENES.iter().filter(|&&n| !n.starts_with("dragon")) {
+        let scene = load(name);
+        let map = Brickmap::build(&input(&scene, &params(level, &[]))).expect("brickmap");
+        let field = Distfield::build(&input(&scene, &params(level, &[]))).expect("distfield");
+        let plain = Distfield::build(&input(&scene, &params(level, &["distfield.cap=1"]))).expect("distfield");
+        let triangles = scene.triangles();
+        for r in &ray_set(&scene, &triangles, 2000, 0x43d ^ name.len() as u64) {
+            let (mut m, mut f, mut p) = (Counters::default(), Counters::default(), Counters::default());
+            let want = map.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut m).map(|h| (h.prim, h.t.to_bits()));
+            let got = field.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut f).map(|h| (h.prim, h.t.to_bits()));
+            let capped = plain.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut p).map(|h| (h.prim, h.t.to_bits()));
+            let ray = format!("{name}: a {} ray {:?}", r.kind, r.ray);
+            assert_eq!((got, capped), (want, want), "{ray}: hits");
+            assert_eq!(p, m, "{ray}: cap 1 counts differ from the brickmap's");
+            assert_eq!(f.pushes, m.pushes, "{ray}: bricks entered");
+            assert_eq!(f.steps_by_level[1..], m.steps_by_level[1..], "{ray}: voxel steps");
+            assert!(f.steps_by_level[0] <= m.steps_by_level[0], "{ray}: top steps {f:?} against {m:?}");
+            let leapt: u64 = f.leaps_by_reach.iter().sum();
+            assert!(leapt <= f.steps_by_level[0] && f.leaps_by_reach[0] == 0, "{ray}: leaps {f:?}");
+            leaps += leapt;
+        }
+    }
+    assert!(leaps > 10_000, "only {leaps} leaps over every scene's rays");
 }
 
 /// A scene of two tiny triangles in opposite corners of its bounding cube: each sets voxels in

@@ -5,6 +5,7 @@ pub mod brickmap;
 pub mod brute_force;
 pub mod bvh;
 pub mod bvh4;
+pub mod distfield;
 pub mod embree;
 pub mod esvo;
 pub mod grid;

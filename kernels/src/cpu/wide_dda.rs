@@ -45,6 +45,14 @@ pub trait WideNodes {
     /// The node of the top cell at `cell` (coordinates in top cells), `None` if it is empty (a
     /// table read: a root-table search, a dense grid's entry).
     fn top(&self, cell: [u32; 3]) -> Option<Self::Node>;
+    /// [`Self::top`], telling for an empty cell how far a ray may leap from it: `Err(d)` where
+    /// every top cell within Chebyshev distance `d − 1` of it is empty (`distfield`'s distance),
+    /// so the DDA steps out of that whole cube at once. The default, `Err(1)`, leaps nothing,
+    /// and the DDA's leap code folds away.
+    #[inline(always)]
+    fn top_or_leap(&self, cell: [u32; 3]) -> Result<Self::Node, u32> {
+        self.top(cell).ok_or(1)
+    }
     /// The data of `node`, whose children are the cells of `level` (≥ 1).
     fn fetch(&self, node: Self::Node, level: usize) -> Self::Desc;
     /// Whether the cell of `level` in slot `slot` of the node of `desc` is occupied (a set voxel
@@ -102,6 +110,10 @@ impl<N: WideReads> WideNodes for Recorded<'_, N> {
         self.nodes.top_reads(cell, &mut self.trace.borrow_mut());
         self.nodes.top(cell)
     }
+    fn top_or_leap(&self, cell: [u32; 3]) -> Result<N::Node, u32> {
+        self.nodes.top_reads(cell, &mut self.trace.borrow_mut());
+        self.nodes.top_or_leap(cell)
+    }
     fn fetch(&self, node: N::Node, level: usize) -> N::Desc {
         descending(self.trace);
         self.nodes.fetch_reads(node, level, &mut self.trace.borrow_mut());
@@ -154,6 +166,9 @@ impl Stats for Shared<'_> {
         let mut trace = self.0.borrow_mut();
         trace.level_step(level);
         trace.step_kind(StepKind::Advance);
+    }
+    fn leap(&mut self, reach: u32) {
+        self.0.borrow_mut().leap(reach);
     }
     fn add(&mut self, counters: &Counters) {
         self.0.borrow_mut().add(counters);
@@ -256,14 +271,17 @@ pub fn cast<N: WideNodes, S: Stats>(
     loop {
         stats.step();
         let tc_max = Frame::nearest(exit);
-        let (occupied, top) = if k == 0 {
+        // `leap`: how many top cells the empty cube around this one reaches (1: itself).
+        let (occupied, top, leap) = if k == 0 {
             stats.visit();
-            let top = nodes.top([0, 1, 2].map(|a| ((lo[a] ^ flip[a]) >> shift) as u32));
-            (top.is_some(), top)
+            match nodes.top_or_leap([0, 1, 2].map(|a| ((lo[a] ^ flip[a]) >> shift) as u32)) {
+                Ok(n) => (true, Some(n), 1),
+                Err(leap) => (false, None, leap),
+            }
         } else if block == 0 {
-            (nodes.occupied(&cur, k, slot.world()), None)
+            (nodes.occupied(&cur, k, slot.world()), None, 1)
         } else {
-            (nodes.empty_block(&cur, k, slot.world(), block) < block, None)
+            (nodes.empty_block(&cur, k, slot.world(), block) < block, None, 1)
         };
         if occupied && t <= tc_max.min(t1) {
             if block > 0 {
@@ -304,21 +322,44 @@ pub fn cast<N: WideNodes, S: Stats>(
             false => 0,
         };
         let mut t_exit = tc_max;
-        if coalesce > block {
-            block = coalesce;
-            lo = lo.map(|x| x & !((1 << (shift + block)) - 1));
-            exit = frame.exits(lo);
-            t_exit = Frame::nearest(exit);
-        }
-        let side = shift + block;
         let mut changed = 0u32;
-        for a in 0..3 {
-            if exit[a] <= t_exit {
-                let stepped = lo[a] - (1 << side);
-                changed |= (lo[a] ^ stepped) as u32;
-                lo[a] = stepped;
-                exit[a] = frame.plane_t(a, stepped);
-                slot.step(a, block);
+        if leap > 1 {
+            // LEAP (top cells only): out of the empty cube of top cells within `leap − 1` of this
+            // one, clipped to the grid — on the mirrored frame's lower side, the only one the ray
+            // can leave by. Axes whose cube plane is the nearest step out of the cube; on the
+            // others the ray is in the cube's cell it has reached at the exit (the planes it has
+            // not crossed, as a descent picks a child), so no cell outside the cube is passed.
+            stats.leap(leap);
+            let cube = lo.map(|x| (x - ((leap as i32 - 1) << shift)).max(0));
+            let cube_exit = frame.exits(cube);
+            t_exit = Frame::nearest(cube_exit);
+            for a in 0..3 {
+                let (next, next_exit) = if cube_exit[a] <= t_exit {
+                    let stepped = cube[a] - (1 << shift);
+                    (stepped, frame.plane_t(a, stepped))
+                } else {
+                    frame.cell_at(a, t_exit, cube[a], (lo[a] - cube[a]) >> shift, shift, cube_exit[a])
+                };
+                changed |= (lo[a] ^ next) as u32;
+                lo[a] = next;
+                exit[a] = next_exit;
+            }
+        } else {
+            if coalesce > block {
+                block = coalesce;
+                lo = lo.map(|x| x & !((1 << (shift + block)) - 1));
+                exit = frame.exits(lo);
+                t_exit = Frame::nearest(exit);
+            }
+            let side = shift + block;
+            for a in 0..3 {
+                if exit[a] <= t_exit {
+                    let stepped = lo[a] - (1 << side);
+                    changed |= (lo[a] ^ stepped) as u32;
+                    lo[a] = stepped;
+                    exit[a] = frame.plane_t(a, stepped);
+                    slot.step(a, block);
+                }
             }
         }
         t = t_exit;
@@ -471,23 +512,31 @@ impl Frame {
                     }
                 }
             } else {
-                let last = (1i32 << bits) - 1;
-                // The ray's mirrored coordinate at t, in voxels; `as` saturates (NaN to 0).
-                let v = (((t + self.bias[a]) * self.inv[a] - 1.0) * self.res) as i32;
-                q = (v.saturating_sub(parent_lo[a]) >> child).clamp(0, last);
-                while q < last && plane(q + 1) > t {
-                    q += 1;
-                }
-                while q > 0 && plane(q) <= t {
-                    q -= 1;
-                }
-                if q > 0 {
-                    exit[a] = plane(q);
-                }
+                (lo[a], exit[a]) = self.cell_at(a, t, parent_lo[a], (1 << bits) - 1, child, parent_exit[a]);
+                continue;
             }
             lo[a] = parent_lo[a] + (q << child);
         }
         (lo, exit)
+    }
+
+    /// On axis `a`, the cell (side `2^child`) the ray is in at `t` among the `last + 1` cells
+    /// from `run_lo` up, whose lowest exit plane is at `run_exit`: the number of the run's inner
+    /// planes the ray has not crossed at `t` (`plane_t > t`), found by a guess from the ray's
+    /// position corrected by the planes themselves. Its lower corner and its exit plane.
+    #[inline(always)]
+    fn cell_at(&self, a: usize, t: f32, run_lo: i32, last: i32, child: u32, run_exit: f32) -> (i32, f32) {
+        let plane = |q: i32| self.plane_t(a, run_lo + (q << child));
+        // The ray's mirrored coordinate at t, in voxels; `as` saturates (NaN to 0).
+        let v = (((t + self.bias[a]) * self.inv[a] - 1.0) * self.res) as i32;
+        let mut q = (v.saturating_sub(run_lo) >> child).clamp(0, last);
+        while q < last && plane(q + 1) > t {
+            q += 1;
+        }
+        while q > 0 && plane(q) <= t {
+            q -= 1;
+        }
+        (run_lo + (q << child), if q > 0 { plane(q) } else { run_exit })
     }
 }
 

@@ -1,4 +1,4 @@
-//! GPU bindings of the hierarchical voxel grids (`vdb`, `tree64`, `brickmap`): each is one WGSL
+//! GPU bindings of the hierarchical voxel grids (`vdb`, `tree64`, `brickmap`, `distfield`): each is one WGSL
 //! file of node functions over the shared hierarchical DDA (`wide_dda.wgsl`, the WGSL twin of
 //! `cpu::wide_dda`) and the mirrored-frame set-up (`octree_ray.wgsl`).
 //!
@@ -9,6 +9,7 @@
 use std::borrow::Cow;
 
 use structures::brickmap::Brickmap;
+use structures::distfield::Distfield;
 use structures::tree64::Tree64;
 use structures::vdb::{Tables, Vdb};
 use structures::voxel::VoxelGrid;
@@ -25,6 +26,7 @@ macro_rules! wide_wgsl {
 const VDB_WGSL: &str = wide_wgsl!("vdb.wgsl");
 const TREE64_WGSL: &str = wide_wgsl!("tree64.wgsl");
 const BRICKMAP_WGSL: &str = wide_wgsl!("brickmap.wgsl");
+const DISTFIELD_WGSL: &str = wide_wgsl!("distfield.wgsl");
 
 /// First `params` word of a structure's own (`WIDE_OWN` in `wide_dda.wgsl`).
 pub const OWN: usize = 13 + MAX_DDA_LEVELS;
@@ -82,6 +84,18 @@ pub fn brickmap(b: &Brickmap) -> GpuProgram<'_> {
         label: "brickmap",
         wgsl: BRICKMAP_WGSL,
         buffers: vec![params(p), GpuBuffer::words_of("top", &b.top), GpuBuffer::words_of("bricks", &b.bricks)],
+        prepass: None,
+        scratch_words: 0,
+    }
+}
+
+pub fn distfield(f: &Distfield) -> GpuProgram<'_> {
+    let mut p = common(&f.grid, f.is_empty(), &f.occupied, &f.levels);
+    p.push(f.side);
+    GpuProgram {
+        label: "distfield",
+        wgsl: DISTFIELD_WGSL,
+        buffers: vec![params(p), GpuBuffer::words_of("top", &f.top), GpuBuffer::words_of("bricks", &f.bricks)],
         prepass: None,
         scratch_words: 0,
     }

@@ -13,6 +13,9 @@
 //   fn wide_child(node: u32, desc: vec4<u32>, k: u32, local: vec3<u32>) -> u32
 //   fn wide_empty_block(desc: vec4<u32>, k: u32, slot: u32, max: u32) -> u32   (0: no coalescing)
 //
+// wide_top may also set wide_leap for an empty top cell (distfield.wgsl): every top cell within
+// Chebyshev distance wide_leap - 1 of it is empty, and the DDA leaps out of that cube in one step.
+//
 // Params (kernels/src/gpu/wide.rs): words 0–4 the voxel grid (octree_ray.wgsl), then WIDE_* below,
 // then the structure's own from WIDE_OWN.
 
@@ -26,6 +29,10 @@ const WIDE_SHIFTS: u32 = 13u;
 const MAX_DDA_LEVELS: u32 = 12u;
 const WIDE_OWN: u32 = 25u;
 const NO_NODE: u32 = 0xffffffffu;
+
+// How far the empty top cell wide_top last met lets a ray leap (cpu::wide_dda's top_or_leap): set
+// to 1 before each top read; only a distance field's wide_top raises it.
+var<private> wide_leap: u32 = 1u;
 
 fn wide_shift(k: u32) -> u32 {
     return params(WIDE_SHIFTS + k);
@@ -58,37 +65,42 @@ struct WideHit {
     voxel: vec3<u32>,
 }
 
-// The lower corner of the child cell (side 2^child) the ray is in at t, inside the cell at
-// parent_lo (side 2^parent): per axis, the parent's inner planes the ray has not crossed at t — a
-// guess from the ray's position, corrected by the planes themselves (cpu::wide_dda's descend).
-fn wide_descend(r: OctreeRay, inv: vec3<f32>, t: f32, parent_lo: vec3<i32>, parent: u32, child: u32) -> vec3<i32> {
+// On axis a, the cell (side w) the ray is in at t among the last + 1 cells from run_lo up: the
+// run's inner planes the ray has not crossed at t — a guess from the ray's position, corrected by
+// the planes themselves (cpu::wide_dda's cell_at). Its lower corner.
+fn wide_cell_at(r: OctreeRay, inv: vec3<f32>, t: f32, a: u32, run_lo: i32, last: i32, w: i32) -> i32 {
     let h = 1.0 / f32(1u << params(4u));
     let res = f32(1u << params(4u));
-    let cells = 1 << (parent - child);
-    let w = 1 << child;
+    let coef = r.coef[a];
+    let bias = r.bias[a];
+    let x = (t + bias) * inv[a];
+    var g = ((x - 1.0) * res - f32(run_lo)) / f32(w);
+    g = select(0.0, g, g == g);
+    var q = i32(clamp(g, 0.0, f32(last)));
+    loop {
+        if (q < last && (1.0 + f32(run_lo + (q + 1) * w) * h) * coef - bias > t) {
+            q += 1;
+        } else {
+            break;
+        }
+    }
+    loop {
+        if (q > 0 && (1.0 + f32(run_lo + q * w) * h) * coef - bias <= t) {
+            q -= 1;
+        } else {
+            break;
+        }
+    }
+    return run_lo + q * w;
+}
+
+// The lower corner of the child cell (side 2^child) the ray is in at t, inside the cell at
+// parent_lo (side 2^parent) (cpu::wide_dda's descend).
+fn wide_descend(r: OctreeRay, inv: vec3<f32>, t: f32, parent_lo: vec3<i32>, parent: u32, child: u32) -> vec3<i32> {
+    let last = (1 << (parent - child)) - 1;
     var out: vec3<i32>;
     for (var a = 0u; a < 3u; a++) {
-        let coef = r.coef[a];
-        let bias = r.bias[a];
-        let x = (t + bias) * inv[a];
-        var g = ((x - 1.0) * res - f32(parent_lo[a])) / f32(w);
-        g = select(0.0, g, g == g);
-        var q = i32(clamp(g, 0.0, f32(cells - 1)));
-        loop {
-            if (q + 1 < cells && (1.0 + f32(parent_lo[a] + (q + 1) * w) * h) * coef - bias > t) {
-                q += 1;
-            } else {
-                break;
-            }
-        }
-        loop {
-            if (q > 0 && (1.0 + f32(parent_lo[a] + q * w) * h) * coef - bias <= t) {
-                q -= 1;
-            } else {
-                break;
-            }
-        }
-        out[a] = parent_lo[a] + q * w;
+        out[a] = wide_cell_at(r, inv, t, a, parent_lo[a], last, 1 << child);
     }
     return out;
 }
@@ -161,9 +173,12 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
         let local = cell & vec3<u32>((1u << bits) - 1u);
         var occupied = false;
         var top = NO_NODE;
+        var leap = 1u;
         if (k == 0u) {
+            wide_leap = 1u;
             top = wide_top(cell);
             occupied = top != NO_NODE;
+            leap = wide_leap;
         } else if (block == 0u) {
             occupied = wide_occupied(desc[k], k, local);
         } else {
@@ -199,17 +214,34 @@ fn wide_cast(r: OctreeRay, t_min_in: f32, t_max_in: f32) -> WideHit {
             coalesce = max(block, wide_empty_block(desc[k], k, wide_slot(local), bits - 1u));
         }
         var t_exit = tc_max;
-        if (coalesce > block) {
-            block = coalesce;
-            lo = lo & vec3<i32>(~((1 << (shift + block)) - 1));
-            exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
-            t_exit = min(min(exit.x, exit.y), exit.z);
-        }
-        let side = shift + block;
         var next = lo;
-        for (var a = 0u; a < 3u; a++) {
-            if (exit[a] <= t_exit) {
-                next[a] -= 1 << side;
+        if (leap > 1u) {
+            // LEAP (top cells only): out of the empty cube of top cells within leap - 1, clipped
+            // to the grid; the axes of its nearest plane step out, the others stay in the cube's
+            // cell the ray has reached (cpu::wide_dda).
+            let cube = max(lo - vec3<i32>(i32(leap - 1u) << shift), vec3<i32>(0));
+            let cube_exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(cube) * h);
+            t_exit = min(min(cube_exit.x, cube_exit.y), cube_exit.z);
+            for (var a = 0u; a < 3u; a++) {
+                if (cube_exit[a] <= t_exit) {
+                    next[a] = cube[a] - (1 << shift);
+                } else {
+                    next[a] = wide_cell_at(r, inv, t_exit, a, cube[a], (lo[a] - cube[a]) >> shift, 1 << shift);
+                }
+            }
+        } else {
+            if (coalesce > block) {
+                block = coalesce;
+                lo = lo & vec3<i32>(~((1 << (shift + block)) - 1));
+                exit = plane_t(r, vec3<f32>(1.0) + vec3<f32>(lo) * h);
+                t_exit = min(min(exit.x, exit.y), exit.z);
+            }
+            let side = shift + block;
+            next = lo;
+            for (var a = 0u; a < 3u; a++) {
+                if (exit[a] <= t_exit) {
+                    next[a] -= 1 << side;
+                }
             }
         }
         t = t_exit;

@@ -162,6 +162,10 @@ impl Stats for Trace {
         self.counters.level_step(level);
     }
 
+    fn leap(&mut self, reach: u32) {
+        self.counters.leap(reach);
+    }
+
     fn add(&mut self, counters: &Counters) {
         self.counters.add(counters);
     }

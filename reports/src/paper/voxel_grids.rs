@@ -1,10 +1,12 @@
-//! "Grid or octree on the same voxels" (seed 003, issue 28): for every scene and resolution of a
-//! run with hierarchical voxel grids (`vdb`, `tree64`, `brickmap`), every voxel structure over the
+//! "Grid or octree on the same voxels" (seed 003, issues 28 and 43): for every scene and resolution
+//! of a run with hierarchical voxel grids (`vdb`, `tree64`, `brickmap`, the distance-field
+//! brickmap `distfield`), every voxel structure over the
 //! same voxelisation — grids and octrees — with its speed as a ratio to ESVO's on the same rays,
 //! its steps and node visits per ray and the level its empty steps were taken at, its bytes per
 //! voxel by component, and its build time as a ratio to the SVDAG's from the same stream; the
 //! triangle BVH beside them. The published same-harness ratios (VoxelRT and the 64-tree guide,
-//! dubiousconst282 2024; NanoVDB's node sizes) and the issue's targets are checked as claims.
+//! dubiousconst282 2024; NanoVDB's node sizes; Deakin & Knackstedt 2019's distance maps) and the
+//! issues' targets are checked as claims; the distance field's leaps are shown by their reach.
 
 use std::fmt::Write;
 
@@ -12,7 +14,7 @@ use crate::claims::{Check, Sheet};
 use crate::schema::{Case, Results, SimtStats};
 
 /// The structures this section is about.
-const GRIDS: [&str; 3] = ["vdb", "tree64", "brickmap"];
+const GRIDS: [&str; 4] = ["vdb", "tree64", "brickmap", "distfield"];
 /// The voxel structures shown beside them, in this order.
 const OCTREES: [&str; 4] = ["svo-naive", "svo", "esvo", "svdag"];
 /// The resolution the issue's targets are measured at (2048³).
@@ -31,6 +33,13 @@ const BRICKMAP_RANGE: (f64, f64) = (0.84, 1.74);
 const BUILD_VS_SVDAG: f64 = 1.5;
 /// VoxelRT's 64-tree over ESVO on one GPU, the low end (1.53–1.92×).
 const TREE64_GPU_LEAD: f64 = 1.53;
+/// Issue 43's targets for the distance field against the brickmap it leaps through.
+const DISTFIELD_SPEEDUP: f64 = 1.5;
+const DISTFIELD_BYTES: f64 = 1.3;
+/// Deakin & Knackstedt 2019 (same harness, a GPU): Chebyshev distance maps over occupancy-block
+/// skipping, and over no skipping at ≤ 4 % occupancy.
+const CHEBYSHEV_OVER_BLOCKS: (f64, f64) = (1.05, 1.6);
+const CHEBYSHEV_OVER_NONE: (f64, f64) = (9.0, 12.0);
 
 fn mrays(c: &Case) -> Option<f64> {
     c.cpu_primary().map(|r| r.mrays_per_s).filter(|m| *m > 0.0)
@@ -170,6 +179,7 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
             crate::plots::bytes(c.build.peak_bytes as f64),
         );
     }
+    let leaps: Vec<String> = at.iter().filter(|c| c.structure == "distfield").filter_map(|c| leaps(c)).collect();
     if let Some(b) = bvh {
         let _ = writeln!(
             out,
@@ -183,6 +193,33 @@ fn table(out: &mut Sheet, scene: &str, l: u32, at: &[&Case], bvh: Option<&Case>)
         );
     }
     out.push('\n');
+    for line in leaps {
+        let _ = writeln!(out, "{line}\n");
+    }
+}
+
+/// A distance field's leaps per ray by reach (the empty cube's radius plus one, in top cells),
+/// beside the mean distance its empty top cells hold and what the transform took.
+fn leaps(c: &Case) -> Option<String> {
+    let r = c.cpu_primary()?;
+    let total: f64 = r.leaps_per_ray_by_reach.iter().sum();
+    let classes: Vec<String> = r
+        .leaps_per_ray_by_reach
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n > 0.0)
+        .map(|(i, n)| format!("{}–{}: {n:.2}", 1u32 << i, (2u32 << i) - 1))
+        .collect();
+    let stats = c.params.get("distfield").and_then(|p| p.get("stats"));
+    let number = |key: &str| stats.and_then(|s| s.get(key)).and_then(serde_json::Value::as_f64);
+    Some(format!(
+        "{}: {total:.1} leaps per ray, by reach in top cells {}; its empty top cells lie {} top cells from a brick \
+         on average; the distance transform took {} ms.",
+        label(c),
+        if classes.is_empty() { "—".into() } else { classes.join(" · ") },
+        number("mean_distance").map_or("—".into(), |m| format!("{m:.1}")),
+        number("transform_ms").map_or("—".into(), |m| format!("{m:.0}")),
+    ))
 }
 
 /// The grids and octrees among `at`, grids first, each family in its list's order.
@@ -270,7 +307,8 @@ fn claims(out: &mut Sheet, scene: &str, l: u32, at: &[&Case]) {
     // The compact VDB the targets are about: coalescing empty blocks where the run has it.
     let compact =
         find(at, "vdb", &[("tables", "compact"), ("skip", "block")]).or(find(at, "vdb", &[("tables", "compact")]));
-    let brickmap = find(at, "brickmap", &[]);
+    let brickmap = at.iter().copied().find(|c| c.structure == "brickmap" && c.variant.is_none());
+    let distfield = at.iter().copied().find(|c| c.structure == "distfield" && c.variant.is_none());
     let svdag = at.iter().copied().find(|c| c.structure == "svdag");
     let mut checks: Vec<Check> = Vec::new();
     let mut check = |claim: String, expected: String, ours: String, held: bool| {
@@ -348,8 +386,31 @@ fn claims(out: &mut Sheet, scene: &str, l: u32, at: &[&Case]) {
             (BRICKMAP_RANGE.0..=BRICKMAP_RANGE.1).contains(&x),
         );
     }
+    let mut distance_checks = Vec::new();
+    if let (Some(d), Some(b)) = (distfield, brickmap) {
+        if let (Some(x), Some(y)) = (mrays(d), mrays(b)) {
+            let r = x / y;
+            distance_checks.push((
+                format!("distfield casts at least {DISTFIELD_SPEEDUP}× brickmap's rays"),
+                format!(
+                    "≥ {DISTFIELD_SPEEDUP}× (Deakin & Knackstedt, GPU: distance maps {}–{}× over block skipping, \
+                     {}–{}× over none)",
+                    CHEBYSHEV_OVER_BLOCKS.0, CHEBYSHEV_OVER_BLOCKS.1, CHEBYSHEV_OVER_NONE.0, CHEBYSHEV_OVER_NONE.1
+                ),
+                format!("{r:.2}×"),
+                r >= DISTFIELD_SPEEDUP,
+            ));
+        }
+        let r = d.memory.bytes as f64 / (b.memory.bytes as f64).max(1.0);
+        distance_checks.push((
+            format!("distfield takes at most {DISTFIELD_BYTES}× brickmap's bytes"),
+            format!("≤ {DISTFIELD_BYTES}×"),
+            format!("{r:.2}× ({:.2} against {:.2} B/voxel)", bytes_per_voxel(d), bytes_per_voxel(b)),
+            r <= DISTFIELD_BYTES,
+        ));
+    }
     if let Some(s) = svdag.map(|s| s.build.timing.ms_median).filter(|s| *s > 0.0) {
-        for c in [dense, compact, tree, brickmap].into_iter().flatten() {
+        for c in [dense, compact, tree, brickmap, distfield].into_iter().flatten() {
             let r = c.build.timing.ms_median / s;
             check(
                 format!("{} builds in at most {BUILD_VS_SVDAG}× the SVDAG's time", label(c)),
@@ -358,6 +419,9 @@ fn claims(out: &mut Sheet, scene: &str, l: u32, at: &[&Case]) {
                 r <= BUILD_VS_SVDAG,
             );
         }
+    }
+    for (claim, expected, ours, held) in distance_checks {
+        checks.push(Check { source: "issue 43", claim, subject: subject.clone(), expected, ours, held });
     }
     if let Some((issue, memory, traffic)) = tree.and_then(|t| lead(t, esvo)) {
         checks.push(Check {
@@ -458,9 +522,18 @@ mod tests {
                     1000.0,
                 ),
                 case("brickmap", None, serde_json::json!({}), 2.0, 76.0, 13_000_000, 1600.0),
+                distfield(),
             ],
             ..Results::default()
         }
+    }
+
+    /// A distance field 1.4× the brickmap's speed at 1.01× its bytes, 9 leaps per ray.
+    fn distfield() -> Case {
+        let mut c = case("distfield", None, serde_json::json!({}), 2.8, 30.0, 13_130_000, 1650.0);
+        c.params["distfield"]["stats"] = serde_json::json!({ "mean_distance": 6.25, "transform_ms": 42.0 });
+        c.render[0].leaps_per_ray_by_reach = vec![0.0, 4.0, 3.0, 2.0];
+        c
     }
 
     #[test]
@@ -489,6 +562,14 @@ mod tests {
         assert!(!verdict("brickmap casts 0.84–1.74×"), "2.0 / 4.0 = 0.5 is below the published range");
         assert!(!verdict("brickmap builds in at most 1.5×"), "1600 / 1000 = 1.6");
         assert!(verdict("tree64 builds in at most 1.5×"));
+        // The distance field against the brickmap it leaps through, and its leaps by reach.
+        assert!(!verdict("distfield casts at least 1.5× brickmap's rays"), "2.8 / 2.0 = 1.4");
+        assert!(verdict("distfield takes at most 1.3× brickmap's bytes"), "1.01×");
+        assert!(
+            text.contains("distfield: 9.0 leaps per ray, by reach in top cells 2–3: 4.00 · 4–7: 3.00 · 8–15: 2.00")
+        );
+        assert!(text.contains("6.2 top cells from a brick on average; the distance transform took 42 ms"), "{text}");
+        assert!(text.contains("| distfield | 2.80 | 0.70 | 30.0 |"), "{text}");
     }
 
     /// Simulated figures: `warp_steps` and `sectors` per ray, `dram` bytes per ray past a 50 MiB

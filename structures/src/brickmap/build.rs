@@ -15,11 +15,16 @@ use crate::{BuildError, BuildInput};
 pub fn build(input: &BuildInput) -> Result<Brickmap, BuildError> {
     let level = level_param(input.params)?;
     let order = order_param(input.params)?;
+    Ok(build_at(input, level, order))
+}
+
+/// The brickmap of `input`'s scene at voxel level `level` (checked), its top grid in `order`.
+pub fn build_at(input: &BuildInput, level: u32, order: CellOrder) -> Brickmap {
     let start = Instant::now();
     let grid = VoxelGrid::fit(input.scene.bounds(), level);
     let (mut sink, shape) = Sink::new(level, order);
     let (counts, voxelize) = stream_voxelization(input.scene, &grid, &shape, &mut sink);
-    Ok(finish(grid, sink, counts, voxelize, start))
+    finish(grid, sink, counts, voxelize, start)
 }
 
 /// The same brickmap from the canonical octree (the tests' second path to the same words).
