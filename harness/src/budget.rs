@@ -278,7 +278,7 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
                     let batch = 64.0 * voxels.min(8.0 * 1_048_576.0);
                     256.0 * n + per_voxel * voxels + batch + 64.0 * 1_048_576.0
                 }
-                "vdb" | "tree64" | "brickmap" => wide_bytes(voxel, input, level, voxels),
+                "vdb" | "tree64" | "brickmap" | "distfield" => wide_bytes(voxel, input, level, voxels),
                 _ => 16.0 * n + 64.0 * voxels,
             }
         }
@@ -290,7 +290,8 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
 /// levels, never the octree: their structure is estimated level by level — a level's nodes are
 /// about the cells of that side a surface touches, [`structures::voxel::estimate_surface_voxels`]
 /// at the level's resolution — times each node's bytes, and the levels' vectors hold up to
-/// 1.6× their length while they grow. The brickmap's dense top grid is exact. Fitted to the peaks
+/// 1.6× their length while they grow. The brickmap's dense top grid is exact (and the distance
+/// field's byte per top cell). Fitted to the peaks
 /// of every built-in scene at L = 8, 10 and 12, each structure and mode: estimate/peak 1.0 (vdb
 /// dense on grass at 4096³) to 17 (flat, whose surface estimate is 8–11× its voxels), about 2–7
 /// at 4096³ elsewhere.
@@ -319,9 +320,12 @@ fn wide_bytes(structure: &str, input: &BuildInput, level: u32, voxels: f64) -> f
                 .sum();
             interior + cells(shifts[shifts.len() - 1]) * 4.0 * sizes.leaf_words(leaf_bits) as f64
         }
+        // The brickmap's, and the distance field's: its top cells' distances, a byte each, held
+        // beside the top grid while they are written into it.
         _ => {
             let top = 4.0 * 8f64.powi(level.saturating_sub(structures::brickmap::BRICK_SHIFT) as i32);
-            top + 64.0 * cells(structures::brickmap::BRICK_SHIFT)
+            let distances = if structure == "distfield" { top / 4.0 } else { 0.0 };
+            top + distances + 64.0 * cells(structures::brickmap::BRICK_SHIFT)
         }
     };
     let window = 24.0 * voxels.min(8.0 * 1_048_576.0);

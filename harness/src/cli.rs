@@ -145,9 +145,10 @@ pub enum Preset {
     /// pre-pass's included) and render time, and bytes per voxel beside the paper's budget. Each
     /// build is timed once. About a minute on 2 cores.
     EsvoBeam,
-    /// Grid or octree on the same voxels (seed 003, issue 28): the hierarchical grids — vdb (dense
-    /// and compact tables, NanoVDB's HDDA, and compact with empty blocks coalesced), tree64 (tree
-    /// and DAG), brickmap — beside svo, esvo (contours off, and on to 4096³) and svdag, and bvh on the
+    /// Grid or octree on the same voxels (seed 003, issues 28 and 43): the hierarchical grids — vdb
+    /// (dense and compact tables, NanoVDB's HDDA, and compact with empty blocks coalesced), tree64
+    /// (tree and DAG), brickmap (row-major and Morton-ordered top grid), distfield (the brickmap
+    /// leaping by Chebyshev distances, to 4096³) — beside svo, esvo (contours off, and on to 4096³) and svdag, and bvh on the
     /// triangles, on bunny, dragon, city, menger, mandelbulb and room at 1024³…8192³ (as far as
     /// memory allows) at 1024×1024: Mrays/s and × esvo, steps and node visits per ray and where
     /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,

@@ -198,7 +198,7 @@ fn list(what: ListWhat) {
         );
         println!(
             "  voxel-grids grid or octree on the same voxels: vdb (dense, compact, compact-block), tree64 (tree, dag), brickmap \
-             beside svo, esvo (contours off, on), svdag and bvh on six scenes at 1024³…8192³, 1024×1024"
+             (row-major, Morton), distfield beside svo, esvo (contours off, on), svdag and bvh on six scenes at 1024³…8192³, 1024×1024"
         );
         println!(
             "  volume     seed 003's volumes: mri-ch2, mri-ch2better, marschner-lobb@256, fog@dragon:512, particles at 1024³ and 2048³ through dense, bricks, octree, vdb, tree64 at 1 / 10 / 30 / 100 % visible voxels, 1024×1024"

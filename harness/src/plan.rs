@@ -226,6 +226,9 @@ impl Preset {
                     [Some(at(l, &[], None)), morton].into_iter().flatten()
                 })
                 .collect(),
+            // The distance field to 4096³: at 8192³ its top grid alone is 4 GiB, and the brickmap's
+            // row there already says what a dense top grid costs.
+            (Preset::VoxelGrids, "distfield") => (10..=12).map(|l| at(l, &[], None)).collect(),
             (Preset::VoxelGrids, "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
                 .map(|l| at(l, &["svdag.leaves=bits"], Some("bits")))
@@ -248,7 +251,7 @@ impl Preset {
                 kernels::STRUCTURES.iter().map(|s| s.name).filter(|&s| s != "embree" && s != "svdag-temporal").collect()
             }
             Preset::EsvoBeam => vec!["bvh", "esvo"],
-            Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "svo", "esvo", "svdag"],
+            Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "distfield", "svo", "esvo", "svdag"],
             Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
             Preset::VolumeOoc => kernels::volume::ooc::page_table::SCHEMES.to_vec(),
             // Its parts name their own.

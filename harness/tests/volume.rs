@@ -135,7 +135,7 @@ fn gpu_volume_rows_agree_with_the_cpu() {
     let results = read_json(&out.join("results.json"));
     let cases = results["volumes"].as_array().expect("volume cases");
     let gpu: Vec<_> = cases.iter().filter(|c| c["backend"] == "gpu").collect();
-    assert_eq!(gpu.len(), 10, "five structures under two transfer functions");
+    assert_eq!(gpu.len(), 12, "six structures under two transfer functions");
     for g in &gpu {
         let what = format!("{} {}", g["transfer"], g["structure"]);
         assert_eq!(g["mismatched_pixels"], 0, "{what}");
@@ -145,7 +145,7 @@ fn gpu_volume_rows_agree_with_the_cpu() {
             .iter()
             .find(|c| c["backend"] == "cpu" && c["structure"] == g["structure"] && c["transfer"] == g["transfer"])
             .expect("its CPU row");
-        if g["structure"] == "dense" || g["structure"] == "bricks" {
+        if ["dense", "bricks", "distfield"].contains(&g["structure"].as_str().unwrap_or_default()) {
             assert_eq!(g["samples_per_ray"], cpu["samples_per_ray"], "{what}");
             assert_eq!(g["visits_per_ray"], cpu["visits_per_ray"], "{what}");
         }

@@ -8,9 +8,10 @@
 use glam::Vec3;
 use kernels::volume::bricks::Bricks;
 use kernels::volume::dense::Dense;
+use kernels::volume::distfield::DistanceField;
 use kernels::volume::ntree::NTree;
 use kernels::volume::octree::MinMaxOctree;
-use kernels::volume::{Histogram, TransferFunction, VOLUME_STRUCTURES, VolumeImage, render};
+use kernels::volume::{Histogram, TransferFunction, VOLUME_STRUCTURES, VolumeImage, VolumeStructure, render};
 use scenes::{Camera, CameraSpec, Samples, Volume};
 
 const SIZE: u32 = 72;
@@ -205,6 +206,38 @@ fn the_trees_step_over_empty_nodes_and_keep_the_dense_image() {
     }
 }
 
+/// The distance field leaps only empty bricks: through it every ray takes exactly the brick
+/// map's samples (the same visible bricks, none skipped), on specks in a large empty box with
+/// unequal spacings, from outside and inside, under several transfer functions — in far fewer
+/// brick visits where space is empty; its distances are the brute-force Chebyshev distances
+/// between bricks.
+#[test]
+fn the_distance_field_leaps_only_empty_bricks() {
+    let v = specks([300, 220, 180], [1.0, 1.5, 0.75]);
+    for (tf_name, tf) in transfer_functions(&v) {
+        let bricks = Bricks::build(&v, &tf);
+        let field = DistanceField::build(&v, &tf);
+        assert_eq!(field.bytes(), bricks.bytes() + bricks.empty.len() as u64, "one byte a brick more");
+        let [nx, ny, _] = bricks.res.map(i64::from);
+        let at = |i: usize| [i as i64 % nx, i as i64 / nx % ny, i as i64 / (nx * ny)];
+        let visible: Vec<[i64; 3]> = (0..bricks.empty.len()).filter(|&i| !bricks.empty[i]).map(at).collect();
+        for (i, &d) in field.distance.iter().enumerate() {
+            let c = at(i);
+            let nearest = visible.iter().map(|o| (0..3).map(|a| (c[a] - o[a]).abs()).max().unwrap_or(0)).min();
+            assert_eq!(i64::from(d), nearest.map_or(255, |n| n.min(255)), "{tf_name}: brick {c:?}");
+        }
+        for (cam, camera) in cameras(&v) {
+            let (a, b) = (render(&bricks, &v, &tf, &camera, 0.5), render(&field, &v, &tf, &camera, 0.5));
+            assert_eq!(bits(&a), bits(&b), "{tf_name} {cam}: the brick map's image");
+            assert_eq!(a.samples, b.samples, "{tf_name} {cam}: the brick map's samples");
+            assert!(b.visits <= a.visits, "{tf_name} {cam}: {} visits against the bricks' {}", b.visits, a.visits);
+            if tf_name == "ramp 25 %" && cam == "outside" {
+                assert!(b.visits * 4 < a.visits, "few leaps: {} visits against the bricks' {}", b.visits, a.visits);
+            }
+        }
+    }
+}
+
 /// A new transfer function re-derives emptiness from the stored ranges: the same bricks and
 /// the same image as a build with it.
 #[test]
@@ -235,6 +268,12 @@ fn a_transfer_function_change_equals_a_rebuild() {
                     "{shape} {from} -> {to}"
                 );
             }
+            let mut field = DistanceField::build(&v, a);
+            field.set_transfer_function(b);
+            let field_rebuilt = DistanceField::build(&v, b);
+            assert_eq!(field.distance, field_rebuilt.distance, "distfield {from} -> {to}");
+            let (one, two) = (render(&field, &v, b, &camera, 0.5), render(&field_rebuilt, &v, b, &camera, 0.5));
+            assert_eq!((bits(&one), one.visits), (bits(&two), two.visits), "distfield {from} -> {to}");
         }
     }
 }
@@ -337,6 +376,7 @@ fn the_gpu_kernel_gives_the_cpu_image() {
             let octree = MinMaxOctree::build(volume, &tf);
             let vdb = NTree::vdb(volume, &tf);
             let tree64 = NTree::tree64(volume, &tf);
+            let field = DistanceField::build(volume, &tf);
             for (cam_name, camera) in cameras(volume) {
                 let dense = render(&Dense, volume, &tf, &camera, step);
                 for (name, walk, cpu) in [
@@ -345,6 +385,7 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                     ("octree", GpuVolume::Octree(&octree), render(&octree, volume, &tf, &camera, step)),
                     ("vdb", GpuVolume::Tree(&vdb), render(&vdb, volume, &tf, &camera, step)),
                     ("tree64", GpuVolume::Tree(&tree64), render(&tree64, volume, &tf, &camera, step)),
+                    ("distfield", GpuVolume::DistanceField(&field), render(&field, volume, &tf, &camera, step)),
                 ] {
                     let what = format!("{} {tf_name} {cam_name} {name}", volume.name);
                     let gpu = render_volume(ctx, volume, &walk, &tf, &camera, step, &opts).expect(&what).image;

@@ -1,5 +1,5 @@
 //! The volume workload on the GPU (issue 32): `volume.wgsl`, the WGSL twin of
-//! [`crate::volume`]'s dense marcher, brick map and min/max octree, over the volume's samples as
+//! [`crate::volume`]'s dense marcher, brick map (leaping, for the distance field) and min/max octree, over the volume's samples as
 //! stored (`u8` four to a word, `u16` two, `f32` one). The octree's walk descends from the root at
 //! each span's start instead of recursing (see volume.wgsl): the same samples and image, other
 //! spans, so its samples and visits per ray are its own.
@@ -13,6 +13,7 @@ use super::rays::{FrameUniform, primary_rays};
 use super::{DispatchOptions, GpuContext, GpuError, GpuRun, run_program};
 use crate::cpu::render::Frame;
 use crate::volume::bricks::Bricks;
+use crate::volume::distfield::DistanceField;
 use crate::volume::ntree::NTree;
 use crate::volume::octree::MinMaxOctree;
 use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
@@ -26,6 +27,8 @@ pub enum GpuVolume<'a> {
     Octree(&'a MinMaxOctree),
     /// The N³-trees (`vdb`, `tree64`).
     Tree(&'a NTree),
+    /// The bricks with distances (`distfield`): the brick walk, leaping.
+    DistanceField(&'a DistanceField),
 }
 
 impl<'a> GpuVolume<'a> {
@@ -42,6 +45,10 @@ impl<'a> GpuVolume<'a> {
                 .as_octree()
                 .map(GpuVolume::Octree)
                 .ok_or_else(|| "the octree entry built no octree".to_string()),
+            "distfield" => structure
+                .as_distance_field()
+                .map(GpuVolume::DistanceField)
+                .ok_or_else(|| "the distfield entry built no distance field".to_string()),
             "vdb" | "tree64" => {
                 structure.as_ntree().map(GpuVolume::Tree).ok_or_else(|| format!("the {name} entry built no tree"))
             }
@@ -111,6 +118,7 @@ pub fn render_volume(
         GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
         GpuVolume::Octree(tree) => (2, Some(&tree.bricks)),
         GpuVolume::Tree(tree) => (2, Some(&tree.bricks)),
+        GpuVolume::DistanceField(field) => (3, Some(&field.bricks)),
     };
     header[M_MODE] = mode;
     let mut empty = Vec::new();
@@ -122,7 +130,7 @@ pub fn render_volume(
     let levels: Vec<_> = match walk {
         GpuVolume::Octree(octree) => octree.levels().collect(),
         GpuVolume::Tree(tree) => tree.levels().collect(),
-        GpuVolume::Dense | GpuVolume::Bricks(_) => Vec::new(),
+        GpuVolume::Dense | GpuVolume::Bricks(_) | GpuVolume::DistanceField(_) => Vec::new(),
     };
     let mut tree = Vec::new();
     // A tree walk reads its level count first, zero levels included.
@@ -139,6 +147,9 @@ pub fn render_volume(
             tree.extend([empty_at, full_at, shift]);
         }
         tree.extend(tables);
+    }
+    if let GpuVolume::DistanceField(field) = walk {
+        tree = field.distance.chunks(4).map(|c| c.iter().rev().fold(0u32, |w, &b| w << 8 | u32::from(b))).collect();
     }
     for &(value, rgba) in tf.points() {
         header.push(f(value));

@@ -1,8 +1,9 @@
 // Volume ray casting (issue 32), the WGSL twin of kernels/src/volume: front-to-back
 // emission–absorption compositing through a piecewise-linear transfer function, samples on the
 // global lattice t_k = k · step, trilinear reads, early termination below MIN_TRANSMITTANCE; the
-// dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1), or a tree over the
-// bricks (mode 2: the min/max octree, the vdb tree or the 64-tree). Every sample is the CPU's operations in
+// dense marcher (mode 0), the brick map's DDA over its empty bricks (mode 1; mode 3 leaping by the
+// distance field's distances), or a tree over the bricks (mode 2: the min/max octree, the vdb
+// tree or the 64-tree). Every sample is the CPU's operations in
 // the CPU's order, so a device that rounds as the CPU does (lavapipe) gives the CPU's image. The
 // dense and brick walks hand over the CPU's very spans; the tree walk is not the CPU's recursion
 // (a GPU thread has no call stack) but a descent from the root at each span's start, so its spans
@@ -15,7 +16,8 @@
 // levels above the bricks, finest first: word 0 their count, then per level TREE_LEVEL_WORDS
 // words (its resolution, the word offsets in `tree` of its empty bits and of its full bits: no
 // empty brick below, and log2 of its nodes' width in bricks: the octree's level, the vdb's 4 and
-// 9, the 64-tree's 2, 4, 6, …), then the bits.
+// 9, the 64-tree's 2, 4, 6, …), then the bits; in mode 3 instead each brick's distance, a byte
+// each, four to a word (brick i in bits 8·(i % 4) of word i / 4).
 //
 // The answer per ray: premultiplied RGB and opacity 1 − T as four f32 words in `scratch` at
 // 4 · index; the hit's prim words carry the samples taken and the bricks visited.
@@ -29,7 +31,7 @@ const M_DIMS: u32 = 1u;        // 3 words
 const M_SPACING: u32 = 4u;     // 3 f32
 const M_INV_SPACING: u32 = 7u; // 3 f32, 1 / spacing as the CPU rounds it
 const M_STEP: u32 = 10u;       // f32
-const M_MODE: u32 = 11u;       // 0 dense, 1 bricks, 2 octree
+const M_MODE: u32 = 11u;       // 0 dense, 1 bricks, 2 a tree, 3 bricks with distances
 const M_BRICKS: u32 = 12u;     // 3 words: bricks per axis
 const M_CELLS: u32 = 15u;      // 3 words: voxel cells per axis
 const M_POINTS: u32 = 18u;     // transfer-function points
@@ -165,8 +167,20 @@ fn brick_empty(index: u32) -> bool {
     return ((empty(index / 32u) >> (index % 32u)) & 1u) != 0u;
 }
 
-// The brick map's DDA: kernels::volume::bricks's march, span for span.
-fn march_bricks(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
+// Mode 3: how far the walk may leap from empty brick `index` (kernels::volume::distfield).
+fn brick_reach(index: u32) -> u32 {
+    return (tree(index / 4u) >> (8u * (index % 4u))) & 0xffu;
+}
+
+// The brick on axis a holding position x (Bricks::unit_at at the bricks' own scale).
+fn brick_at(a: u32, x: f32, last: u32) -> u32 {
+    let u = x / (header_f(M_SPACING + a) * f32(BRICK));
+    return u32(clamp(u, 0.0, f32(last)));
+}
+
+// The brick map's DDA: kernels::volume::bricks's walk, span for span; with `leaping` (mode 3) it
+// leaps from an empty brick out of the empty cube its distance vouches for (Bricks::leap).
+fn march_bricks(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32, leaping: bool) {
     let o = ray.origin;
     let d = ray.dir + vec3<f32>(0.0);
     let inv = reciprocal(ray.dir);
@@ -212,6 +226,81 @@ fn march_bricks(c: ptr<function, Compositor>, ray: Ray, t0: f32, t1: f32) {
         }
         if (t_out >= t1) {
             return;
+        }
+        var reach = 1u;
+        if (leaping && brick_empty(index)) {
+            reach = brick_reach(index);
+        }
+        if (reach > 1u) {
+            // LEAP out of the cube of bricks within reach - 1, clipped to the domain.
+            let radius = reach - 1u;
+            var lo = cell;
+            var hi = cell;
+            var t_face = vec3<f32>(f32_inf());
+            var t_leap = f32_inf();
+            for (var b = 0u; b < 3u; b++) {
+                if (step[b] != 0) {
+                    lo[b] = select(0u, cell[b] - radius, cell[b] >= radius);
+                    hi[b] = min(cell[b] + radius, res[b] - 1u);
+                    let f = select(lo[b], hi[b] + 1u, step[b] > 0);
+                    t_face[b] = (brick_face(b, f) - o[b]) * inv[b];
+                    t_leap = min(t_leap, t_face[b]);
+                }
+            }
+            if (t_leap >= t1) {
+                return;
+            }
+            t_in = max(t_in, t_leap);
+            for (var b = 0u; b < 3u; b++) {
+                if (step[b] == 0) {
+                    continue;
+                }
+                if (t_face[b] <= t_leap) {
+                    let next = select(i32(lo[b]) - 1, i32(hi[b]) + 1, step[b] > 0);
+                    if (next < 0 || next >= i32(res[b])) {
+                        take(c, t_in, t1);
+                        return;
+                    }
+                    cell[b] = u32(next);
+                } else if (step[b] > 0) {
+                    var j = clamp(brick_at(b, o[b] + d[b] * t_leap, res[b] - 1u), cell[b], hi[b]);
+                    loop {
+                        if (j < hi[b] && (brick_face(b, j + 1u) - o[b]) * inv[b] <= t_leap) {
+                            j += 1u;
+                        } else {
+                            break;
+                        }
+                    }
+                    loop {
+                        if (j > cell[b] && (brick_face(b, j) - o[b]) * inv[b] > t_leap) {
+                            j -= 1u;
+                        } else {
+                            break;
+                        }
+                    }
+                    cell[b] = j;
+                } else {
+                    var j = clamp(brick_at(b, o[b] + d[b] * t_leap, res[b] - 1u), lo[b], cell[b]);
+                    loop {
+                        if (j > lo[b] && (brick_face(b, j) - o[b]) * inv[b] <= t_leap) {
+                            j -= 1u;
+                        } else {
+                            break;
+                        }
+                    }
+                    loop {
+                        if (j < cell[b] && (brick_face(b, j + 1u) - o[b]) * inv[b] > t_leap) {
+                            j += 1u;
+                        } else {
+                            break;
+                        }
+                    }
+                    cell[b] = j;
+                }
+                let face = select(cell[b], cell[b] + 1u, step[b] > 0);
+                t_next[b] = (brick_face(b, face) - o[b]) * inv[b];
+            }
+            continue;
         }
         t_in = max(t_in, t_out);
         let next = i32(cell[a]) + step[a];
@@ -316,7 +405,10 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
                 take(&c, span.x, span.y);
             }
             case 1u: {
-                march_bricks(&c, ray, span.x, span.y);
+                march_bricks(&c, ray, span.x, span.y, false);
+            }
+            case 3u: {
+                march_bricks(&c, ray, span.x, span.y, true);
             }
             default: {
                 march_tree(&c, ray, span.x, span.y);

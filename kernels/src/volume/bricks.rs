@@ -121,6 +121,17 @@ impl VolumeStructure for Bricks {
 
 impl VolumeMarch for Bricks {
     fn march(&self, ray: &Ray, t0: f32, t1: f32, c: &mut Compositor) {
+        self.walk(ray, t0, t1, c, |_| 1);
+    }
+}
+
+impl Bricks {
+    /// The brick walk: a 3D-DDA over the bricks, each span of a brick that is not empty handed
+    /// to `c`. From an empty brick `i` it leaps the cube of bricks within `reach(i) − 1` of it,
+    /// which the caller vouches are all empty (the distance field's, [`super::distfield`]; 1:
+    /// brick by brick).
+    #[inline(always)]
+    pub(super) fn walk(&self, ray: &Ray, t0: f32, t1: f32, c: &mut Compositor, reach: impl Fn(usize) -> u32) {
         let o = ray.origin.to_array();
         let d = (ray.dir + Vec3::ZERO).to_array();
         let inv = crate::cpu::slab::reciprocal(ray.dir);
@@ -136,6 +147,7 @@ impl VolumeMarch for Bricks {
                 t_next[a] = (self.face(a, face) - o[a]) * inv[a];
             }
         }
+        let lines = Lines { o, d, inv, step };
         let mut t_in = t0;
         loop {
             let (a, t_exit) =
@@ -143,11 +155,26 @@ impl VolumeMarch for Bricks {
             let t_out = t_exit.min(t1);
             let index = (cell[0] + self.res[0] * (cell[1] + self.res[1] * cell[2])) as usize;
             c.visits += 1;
-            if t_out > t_in && !self.empty[index] && !c.take(t_in, t_out) {
+            let empty = self.empty[index];
+            if t_out > t_in && !empty && !c.take(t_in, t_out) {
                 return;
             }
             if t_out >= t1 {
                 return;
+            }
+            let leap = if empty { reach(index) } else { 1 };
+            if leap > 1 {
+                let (t_leap, inside) = self.leap(&lines, &mut cell, &mut t_next, leap - 1);
+                if t_leap >= t1 {
+                    return;
+                }
+                t_in = t_in.max(t_leap);
+                if !inside {
+                    // Out of the domain before the span's end, as a step past the last brick.
+                    c.take(t_in, t1);
+                    return;
+                }
+                continue;
             }
             // Never backwards: where the ray crosses two faces at once their `t`s may round
             // apart, and a span must not start before the last one ended (a sample taken twice).
@@ -165,4 +192,69 @@ impl VolumeMarch for Bricks {
             t_next[a] = (self.face(a, face) - o[a]) * inv[a];
         }
     }
+
+    /// LEAP out of the cube of bricks within `radius` of the (empty) brick at `cell`, clipped to
+    /// the domain: the `t` where the ray leaves it by its nearest face, and whether it is still
+    /// inside the domain there. Axes whose cube face is that nearest step out of the cube; on the
+    /// others the ray is in the cube's brick whose entry face it has crossed and exit face not
+    /// (every face `t` by [`Bricks::face`], as the DDA computes them), so the walk goes on exactly
+    /// as brick-by-brick steps would have brought it there. `cell` and `t_next` become the new
+    /// brick's.
+    fn leap(&self, l: &Lines, cell: &mut [u32; 3], t_next: &mut [f32; 3], radius: u32) -> (f32, bool) {
+        let t_of = |a: usize, f: u32| (self.face(a, f) - l.o[a]) * l.inv[a];
+        // Per axis the cube's bricks `lo..=hi` and the face the ray leaves them by.
+        let mut span = [(0u32, 0u32, f32::INFINITY); 3];
+        let mut t_exit = f32::INFINITY;
+        for a in 0..3 {
+            if l.step[a] == 0 {
+                continue;
+            }
+            let (lo, hi) = (cell[a].saturating_sub(radius), (cell[a] + radius).min(self.res[a] - 1));
+            let t = t_of(a, if l.step[a] > 0 { hi + 1 } else { lo });
+            span[a] = (lo, hi, t);
+            t_exit = t_exit.min(t);
+        }
+        for a in 0..3 {
+            let (lo, hi, t) = span[a];
+            if l.step[a] == 0 {
+                continue;
+            }
+            if t <= t_exit {
+                let next = if l.step[a] > 0 { i64::from(hi) + 1 } else { i64::from(lo) - 1 };
+                if next < 0 || next >= i64::from(self.res[a]) {
+                    return (t_exit, false);
+                }
+                cell[a] = next as u32;
+            } else if l.step[a] > 0 {
+                // From a guess by position (rounding may miss by a brick), settled by the faces.
+                let mut j = self.unit_at(a, l.o[a] + l.d[a] * t_exit, 0).clamp(cell[a], hi);
+                while j < hi && t_of(a, j + 1) <= t_exit {
+                    j += 1;
+                }
+                while j > cell[a] && t_of(a, j) > t_exit {
+                    j -= 1;
+                }
+                cell[a] = j;
+            } else {
+                let mut j = self.unit_at(a, l.o[a] + l.d[a] * t_exit, 0).clamp(lo, cell[a]);
+                while j > lo && t_of(a, j) <= t_exit {
+                    j -= 1;
+                }
+                while j < cell[a] && t_of(a, j + 1) > t_exit {
+                    j += 1;
+                }
+                cell[a] = j;
+            }
+            t_next[a] = t_of(a, if l.step[a] > 0 { cell[a] + 1 } else { cell[a] });
+        }
+        (t_exit, true)
+    }
+}
+
+/// A ray as the brick walk's leaps need it: origin, direction, reciprocal and step per axis.
+struct Lines {
+    o: [f32; 3],
+    d: [f32; 3],
+    inv: [f32; 3],
+    step: [i64; 3],
 }

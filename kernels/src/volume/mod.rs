@@ -18,7 +18,8 @@
 //!
 //! Structures ([`VOLUME_STRUCTURES`], what the harness's `volume` workload measures): [`dense`]
 //! (no skipping), [`bricks`] (a min/max value range per brick of voxels, emptiness re-derived from
-//! a new transfer function without a rebuild), [`octree`] (a min/max tree over the bricks), and
+//! a new transfer function without a rebuild), [`distfield`] (the bricks with each empty brick's
+//! Chebyshev distance to a visible one, leapt), [`octree`] (a min/max tree over the bricks), and
 //! `vdb` and `tree64` ([`ntree`]: OpenVDB's 5-4-3 tree and the 64-tree over the bricks, walked by
 //! a hierarchical DDA).
 //!
@@ -28,6 +29,7 @@
 
 pub mod bricks;
 pub mod dense;
+pub mod distfield;
 pub mod ntree;
 pub mod octree;
 pub mod ooc;
@@ -359,6 +361,11 @@ pub trait VolumeStructure: VolumeMarch + Send {
     fn as_bricks(&self) -> Option<&bricks::Bricks> {
         None
     }
+    /// The structure as a distance field, for the GPU kernel's leaping brick walk; `None` for any
+    /// other.
+    fn as_distance_field(&self) -> Option<&distfield::DistanceField> {
+        None
+    }
     /// The structure as a min/max octree, for the GPU kernel's octree walk; `None` for any other.
     fn as_octree(&self) -> Option<&octree::MinMaxOctree> {
         None
@@ -388,6 +395,12 @@ pub const VOLUME_STRUCTURES: &[VolumeEntry] = &[
         name: "bricks",
         summary: "8³-voxel bricks with their value ranges, walked by a 3D-DDA",
         build: |v, tf| Box::new(bricks::Bricks::build(v, tf)),
+    },
+    VolumeEntry {
+        name: "distfield",
+        summary: "the bricks with each empty brick's Chebyshev distance to a visible one, leapt by the brick walk \
+                  (re-derived on a transfer-function change)",
+        build: |v, tf| Box::new(distfield::DistanceField::build(v, tf)),
     },
     VolumeEntry {
         name: "octree",

@@ -22,7 +22,7 @@ pub fn from_brickmap(map: Brickmap, cap: u8, start: Instant) -> Distfield {
     assert_eq!(map.order, CellOrder::Linear, "the distance field indexes its top grid row-major");
     let transform = Instant::now();
     let side = map.side as usize;
-    let distance = super::transform::chebyshev(side, cap, |i| map.top[i] != 0);
+    let distance = super::transform::chebyshev([side; 3], cap, |i| map.top[i] != 0);
     let mut top = map.top;
     let mut by_distance = [0u64; 8];
     let (mut empty, mut sum) = (0u64, 0u64);

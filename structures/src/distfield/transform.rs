@@ -17,40 +17,40 @@
 //! capped distance. Per row the 12 neighbours in earlier rows are one vectorisable min of four
 //! rows and a horizontal min of three; only the neighbour in the same row is a serial scan.
 
-/// The capped chessboard distance of every cell of a `side`³ grid (x fastest) to the nearest
-/// cell where `occupied` holds: 0 on occupied cells, at most `cap` (≥ 1) elsewhere, `cap` where
-/// no occupied cell lies within `cap − 1`. Cells outside the grid count as empty.
-pub fn chebyshev(side: usize, cap: u8, occupied: impl Fn(usize) -> bool) -> Vec<u8> {
+/// The capped chessboard distance of every cell of a grid of `dims` cells (x fastest) to the
+/// nearest cell where `occupied` holds: 0 on occupied cells, at most `cap` (≥ 1) elsewhere, `cap`
+/// where no occupied cell lies within `cap − 1`. Cells outside the grid count as empty.
+pub fn chebyshev(dims: [usize; 3], cap: u8, occupied: impl Fn(usize) -> bool) -> Vec<u8> {
     assert!(cap >= 1, "a distance cap below 1 leaves no room for an empty cell");
-    let n = side;
-    let mut d: Vec<u8> = (0..n * n * n).map(|i| if occupied(i) { 0 } else { cap }).collect();
-    if n == 0 {
+    let [nx, ny, nz] = dims;
+    let mut d: Vec<u8> = (0..nx * ny * nz).map(|i| if occupied(i) { 0 } else { cap }).collect();
+    if d.is_empty() {
         return d;
     }
-    let mut near = vec![0u8; n];
+    let mut near = vec![0u8; nx];
     // Forward: rows in raster order, each from the three rows below it in the previous plane, the
     // previous row of its plane, and its left neighbour.
-    for z in 0..n {
-        for y in 0..n {
+    for z in 0..nz {
+        for y in 0..ny {
             let before = [
                 (z > 0 && y > 0).then(|| (z - 1, y - 1)),
                 (z > 0).then(|| (z - 1, y)),
-                (z > 0 && y + 1 < n).then(|| (z - 1, y + 1)),
+                (z > 0 && y + 1 < ny).then(|| (z - 1, y + 1)),
                 (y > 0).then(|| (z, y - 1)),
             ];
-            relax_row(&mut d, n, z, y, &before, &mut near, cap, false);
+            relax_row(&mut d, [nx, ny], (z, y), &before, &mut near, cap, false);
         }
     }
     // Backward: the mirror image, from the other 13.
-    for z in (0..n).rev() {
-        for y in (0..n).rev() {
+    for z in (0..nz).rev() {
+        for y in (0..ny).rev() {
             let after = [
-                (z + 1 < n && y > 0).then(|| (z + 1, y - 1)),
-                (z + 1 < n).then(|| (z + 1, y)),
-                (z + 1 < n && y + 1 < n).then(|| (z + 1, y + 1)),
-                (y + 1 < n).then(|| (z, y + 1)),
+                (z + 1 < nz && y > 0).then(|| (z + 1, y - 1)),
+                (z + 1 < nz).then(|| (z + 1, y)),
+                (z + 1 < nz && y + 1 < ny).then(|| (z + 1, y + 1)),
+                (y + 1 < ny).then(|| (z, y + 1)),
             ];
-            relax_row(&mut d, n, z, y, &after, &mut near, cap, true);
+            relax_row(&mut d, [nx, ny], (z, y), &after, &mut near, cap, true);
         }
     }
     d
@@ -59,12 +59,10 @@ pub fn chebyshev(side: usize, cap: u8, occupied: impl Fn(usize) -> bool) -> Vec<
 /// One row of a pass: each cell becomes at most one more than its nearest already-relaxed
 /// neighbour — the x−1..x+1 cells of the `rows` given, then (serially) the previous cell of the
 /// row itself in the pass's direction.
-#[allow(clippy::too_many_arguments)] // one row's inputs and its scratch
 fn relax_row(
     d: &mut [u8],
-    n: usize,
-    z: usize,
-    y: usize,
+    [n, ny]: [usize; 2],
+    (z, y): (usize, usize),
     rows: &[Option<(usize, usize)>; 4],
     near: &mut [u8],
     cap: u8,
@@ -72,12 +70,12 @@ fn relax_row(
 ) {
     near.fill(u8::MAX);
     for &(rz, ry) in rows.iter().flatten() {
-        let row = &d[(rz * n + ry) * n..][..n];
+        let row = &d[(rz * ny + ry) * n..][..n];
         for (m, &v) in near.iter_mut().zip(row) {
             *m = (*m).min(v);
         }
     }
-    let row = &mut d[(z * n + y) * n..][..n];
+    let row = &mut d[(z * ny + y) * n..][..n];
     // The horizontal min of three, then one step on, into the row.
     let mut left = u8::MAX;
     for x in 0..n {
@@ -105,9 +103,9 @@ mod tests {
     use super::*;
 
     /// The capped distance by brute force: every occupied cell against every cell.
-    fn brute(side: usize, cap: u8, occ: &[bool]) -> Vec<u8> {
-        let n = side as i64;
-        let at = |i: usize| [i as i64 % n, i as i64 / n % n, i as i64 / (n * n)];
+    fn brute(dims: [usize; 3], cap: u8, occ: &[bool]) -> Vec<u8> {
+        let [nx, ny] = [dims[0] as i64, dims[1] as i64];
+        let at = |i: usize| [i as i64 % nx, i as i64 / nx % ny, i as i64 / (nx * ny)];
         let occupied: Vec<[i64; 3]> = (0..occ.len()).filter(|&i| occ[i]).map(at).collect();
         (0..occ.len())
             .map(|i| {
@@ -129,12 +127,24 @@ mod tests {
     #[test]
     fn equals_brute_force_on_random_grids_of_every_density() {
         let mut state = 0x43;
-        for side in [1usize, 2, 3, 5, 8, 13, 16] {
+        for dims in [
+            [1usize, 1, 1],
+            [2, 2, 2],
+            [3, 3, 3],
+            [5, 5, 5],
+            [8, 8, 8],
+            [13, 13, 13],
+            [16, 16, 16],
+            [1, 7, 3],
+            [9, 2, 5],
+            [4, 11, 1],
+        ] {
             for per_mille in [0u64, 1, 5, 30, 200, 700, 1000] {
                 for cap in [1u8, 2, 3, 7, 255] {
-                    let occ: Vec<bool> = (0..side.pow(3)).map(|_| next(&mut state) % 1000 < per_mille).collect();
-                    let got = chebyshev(side, cap, |i| occ[i]);
-                    assert_eq!(got, brute(side, cap, &occ), "side {side}, {per_mille}‰ occupied, cap {cap}");
+                    let occ: Vec<bool> =
+                        (0..dims.iter().product()).map(|_| next(&mut state) % 1000 < per_mille).collect();
+                    let got = chebyshev(dims, cap, |i| occ[i]);
+                    assert_eq!(got, brute(dims, cap, &occ), "{dims:?}, {per_mille}‰ occupied, cap {cap}");
                 }
             }
         }
@@ -145,7 +155,7 @@ mod tests {
         let side = 11usize;
         let mut occ = vec![false; side.pow(3)];
         occ[(2 * side + 9) * side + 4] = true; // (4, 9, 2): shells reach every face at a different distance
-        let got = chebyshev(side, 255, |i| occ[i]);
+        let got = chebyshev([side; 3], 255, |i| occ[i]);
         for (i, &d) in got.iter().enumerate() {
             let c = [i % side, i / side % side, i / (side * side)];
             let want = [c[0].abs_diff(4), c[1].abs_diff(9), c[2].abs_diff(2)].into_iter().max().unwrap();
