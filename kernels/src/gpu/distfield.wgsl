@@ -1,6 +1,7 @@
 // GPU kernel of the distance-field brickmap (structures::distfield; CPU twin
 // kernels/src/cpu/distfield.rs): the shared hierarchical DDA (wide_dda.wgsl) on the brickmap's two
-// levels, leaping at the top one: wide_top says how far through wide_leap.
+// levels, leaping at the top one: wide_top says how far through wide_leap; its bricks are the
+// brickmap's (brick_cells.wgsl).
 //
 // Buffers: `params` (wide_dda.wgsl's, then the top grid's cells per axis), `top` (bit 31 clear: a
 // brick's index; set: an empty cell, its low 8 bits the Chebyshev distance in top cells to the
@@ -17,22 +18,4 @@ fn wide_top(cell: vec3<u32>) -> u32 {
         return NO_NODE;
     }
     return word * 16u;
-}
-
-fn wide_fetch(node: u32, k: u32) -> vec4<u32> {
-    return vec4<u32>(node, 0u, 0u, 0u);
-}
-
-fn wide_occupied(d: vec4<u32>, k: u32, local: vec3<u32>) -> bool {
-    let v = wide_slot(local);
-    return ((bricks(d.x + (v >> 5u)) >> (v & 31u)) & 1u) == 1u;
-}
-
-fn wide_child(node: u32, d: vec4<u32>, k: u32, local: vec3<u32>) -> u32 {
-    // A brick's cells are voxels: never called.
-    return 0u;
-}
-
-fn wide_empty_block(d: vec4<u32>, k: u32, slot: u32, max: u32) -> u32 {
-    return 0u;
 }

@@ -19,14 +19,14 @@ use super::{GpuBuffer, GpuProgram};
 
 /// A hierarchical grid's WGSL: the shared set-up and DDA, then its own node functions.
 macro_rules! wide_wgsl {
-    ($own:literal) => {
-        concat!(include_str!("octree_ray.wgsl"), include_str!("wide_dda.wgsl"), include_str!($own))
+    ($($own:literal),+) => {
+        concat!(include_str!("octree_ray.wgsl"), include_str!("wide_dda.wgsl"), $(include_str!($own)),+)
     };
 }
 const VDB_WGSL: &str = wide_wgsl!("vdb.wgsl");
 const TREE64_WGSL: &str = wide_wgsl!("tree64.wgsl");
-const BRICKMAP_WGSL: &str = wide_wgsl!("brickmap.wgsl");
-const DISTFIELD_WGSL: &str = wide_wgsl!("distfield.wgsl");
+const BRICKMAP_WGSL: &str = wide_wgsl!("brick_cells.wgsl", "brickmap.wgsl");
+const DISTFIELD_WGSL: &str = wide_wgsl!("brick_cells.wgsl", "distfield.wgsl");
 
 /// First `params` word of a structure's own (`WIDE_OWN` in `wide_dda.wgsl`).
 pub const OWN: usize = 13 + MAX_DDA_LEVELS;

@@ -122,25 +122,41 @@ impl Structure for Brickmap {
     }
 
     fn memory(&self) -> MemoryReport {
-        let cells = self.top.len() as u64;
-        // N_c = top cells and bricks, N_p = one brick pointer per top cell.
-        MemoryReport::new(cells + self.stats.bricks, cells)
-            .with("top_grid", cells * 4)
-            .with("bricks", self.bricks.len() as u64 * 4)
+        brick_grid_memory(&self.top, &self.bricks)
     }
 
     fn params(&self) -> serde_json::Value {
         let mut v = voxel_params_json(&self.grid, self.voxels, &self.voxelize);
-        let memory = self.memory();
-        v["brickmap"] = json!({
+        let own = json!({
             "stats": self.stats,
-            "brick_side": 1u32 << BRICK_SHIFT,
             "order": self.order.name(),
             "morton_encoder": (self.order == CellOrder::Morton).then(|| self.morton.name()),
-            "level_sides": self.shape().dda_shifts().iter().map(|s| 1u64 << s).collect::<Vec<_>>(),
-            "bytes_per_voxel": memory.total_bytes() as f64 / self.voxels.max(1) as f64,
-            "bytes_per_voxel_by_component": crate::memory::per_voxel(&memory, self.voxels),
         });
+        v["brickmap"] = brick_grid_json(own, &self.shape(), &self.memory(), self.voxels);
         v
     }
+}
+
+/// The memory of a dense top grid of words over 8³ bit bricks (the brickmap's, the distance
+/// field's): N_c = top cells and bricks, N_p = one word per top cell.
+pub(crate) fn brick_grid_memory(top: &[u32], bricks: &[u32]) -> MemoryReport {
+    let cells = top.len() as u64;
+    MemoryReport::new(cells + (bricks.len() / BRICK_WORDS) as u64, cells)
+        .with("top_grid", cells * 4)
+        .with("bricks", bricks.len() as u64 * 4)
+}
+
+/// A brick grid's entry in the results: `own` (its stats and settings) with the brick side, the
+/// DDA's level sides and the bytes per voxel, by component.
+pub(crate) fn brick_grid_json(
+    mut own: serde_json::Value,
+    shape: &WideShape,
+    memory: &MemoryReport,
+    voxels: u64,
+) -> serde_json::Value {
+    own["brick_side"] = json!(1u32 << BRICK_SHIFT);
+    own["level_sides"] = json!(shape.dda_shifts().iter().map(|s| 1u64 << s).collect::<Vec<_>>());
+    own["bytes_per_voxel"] = json!(memory.total_bytes() as f64 / voxels.max(1) as f64);
+    own["bytes_per_voxel_by_component"] = json!(crate::memory::per_voxel(memory, voxels));
+    own
 }

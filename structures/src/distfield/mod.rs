@@ -29,7 +29,7 @@ pub mod validate;
 use serde::Serialize;
 use serde_json::json;
 
-use crate::brickmap::BrickmapStats;
+use crate::brickmap::{BrickmapStats, brick_grid_json, brick_grid_memory};
 use crate::svo::voxel_params_json;
 use crate::voxel::wide::{DdaLevels, WideShape};
 use crate::voxel::{VoxelGrid, VoxelizeStats};
@@ -123,25 +123,14 @@ impl Structure for Distfield {
         Some(self.grid.resolution() as u64)
     }
 
+    /// The brickmap's: a top word (a brick's index or a distance) per top cell, and the bricks.
     fn memory(&self) -> MemoryReport {
-        let cells = self.top.len() as u64;
-        // As the brickmap's: N_c = top cells and bricks, N_p = one word per top cell (a brick's
-        // index or a distance).
-        MemoryReport::new(cells + self.stats.brickmap.bricks, cells)
-            .with("top_grid", cells * 4)
-            .with("bricks", self.bricks.len() as u64 * 4)
+        brick_grid_memory(&self.top, &self.bricks)
     }
 
     fn params(&self) -> serde_json::Value {
         let mut v = voxel_params_json(&self.grid, self.voxels, &self.voxelize);
-        let memory = self.memory();
-        v["distfield"] = json!({
-            "stats": self.stats,
-            "brick_side": 1u32 << BRICK_SHIFT,
-            "level_sides": self.shape().dda_shifts().iter().map(|s| 1u64 << s).collect::<Vec<_>>(),
-            "bytes_per_voxel": memory.total_bytes() as f64 / self.voxels.max(1) as f64,
-            "bytes_per_voxel_by_component": crate::memory::per_voxel(&memory, self.voxels),
-        });
+        v["distfield"] = brick_grid_json(json!({ "stats": self.stats }), &self.shape(), &self.memory(), self.voxels);
         v
     }
 }
