@@ -4,7 +4,7 @@
 //! `kernels/src/gpu/brickmap.wgsl` (its bricks in `brick_cells.wgsl`).
 //!
 //! The bricks under a dense top grid are the distance field's too ([`super::distfield`]): both
-//! are [`BrickGrid`]s, which differ only in what a top word says.
+//! are `BrickGrid`s, which differ only in what a top word says.
 
 use glam::Vec3;
 use scenes::{Camera, Ray};
