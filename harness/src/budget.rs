@@ -210,8 +210,21 @@ pub fn build_bytes(structure: &str, input: &BuildInput) -> u64 {
             // paper's defaults (every built-in scene), 1.25–1.58 for the org-fast preset's
             // `fast` variant (its five scenes).
             let Ok(kind) = structures::grid::GridKind::from_params(structure, input.params) else { return 0 };
-            let (cells, refs) = structures::grid::build::estimate_top(&input.triangles, kind);
-            let (cells, refs) = (cells as f64, refs as f64);
+            let (res, refs) = structures::grid::build::estimate_top(&input.triangles, kind);
+            let cells = structures::grid::resolution::cells(res) as f64;
+            let refs = refs as f64;
+            // `ug.order=morton` lays the cells out over the power-of-two box holding them (up to 8×
+            // the cells), with a map from Morton to row-major index and a second copy of the cells
+            // and references while it reorders them.
+            let morton = matches!(kind, GridKind::Ug { .. })
+                && structures::grid::order_param(structure, input.params)
+                    .is_ok_and(|o| o == structures::voxel::morton::CellOrder::Morton);
+            let (cells, refs) = match morton {
+                true => {
+                    (cells + 2.0 * res.iter().map(|r| f64::from(r.next_power_of_two())).product::<f64>(), refs * 1.5)
+                }
+                false => (cells, refs),
+            };
             let beta = refs / n.max(1.0);
             let cap = structures::grid::MAX_REFS as f64;
             let (sub_cells, sub_refs) = match kind {

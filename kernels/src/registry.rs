@@ -89,9 +89,14 @@ pub static STRUCTURES: &[StructureEntry] = &[
     StructureEntry {
         name: "ug",
         family: "triangle",
-        summary: "uniform grid, Eq. 1 (ug.lambda, default 5)",
-        params: &["ug.lambda", "ug.layout", "ug.packet", "simd"],
-        check: |p| grid_check("ug", p),
+        summary: "uniform grid, Eq. 1 (ug.lambda, default 5); cells row-major or in Morton order (ug.order=linear|morton, \
+                  morton.encoder=auto|table)",
+        params: &["ug.lambda", "ug.layout", "ug.packet", "ug.order", "morton.encoder", "simd"],
+        check: |p| {
+            grid_check("ug", p)?;
+            structures::grid::order_param("ug", p)?;
+            structures::voxel::morton::Morton::from_params(p).map(drop)
+        },
         build: |input| build_grid("ug", input),
         available: always,
     },
@@ -231,9 +236,12 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "brickmap",
         family: "voxel",
         summary: "brickmap (van Wingerden 2015): dense top grid of pointers to 8³ bit bricks (row-major, or Morton order: \
-                  brickmap.order=morton), two-level DDA; --levels L",
+                  brickmap.order=morton, morton.encoder=auto|table), two-level DDA; --levels L",
         params: &structures::brickmap::KEYS,
-        check: |p| structures::brickmap::level_param(p).and(structures::brickmap::order_param(p)).map(drop),
+        check: |p| {
+            structures::brickmap::level_param(p).and(structures::brickmap::order_param(p))?;
+            structures::voxel::morton::Morton::from_params(p).map(drop)
+        },
         build: |input| Ok(Box::new(structures::brickmap::Brickmap::build(input)?)),
         available: always,
     },

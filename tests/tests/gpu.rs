@@ -316,16 +316,20 @@ fn voxel_grid_variants() {
     assert!(failures.is_empty(), "hierarchical grid variants differ from the CPU:\n{}", failures.join("\n"));
 }
 
-/// The kd-tree's and the triangle octree's switches beyond their defaults: kd-restart and ropes
-/// (each with its fall-back to the stack walk), the kd-tree without perfect splits, and the octree with
-/// bounding-box lists, without mailboxing, and with one triangle per leaf. The GPU must also take
-/// the CPU's steps: the counted steps per ray are equal.
+/// The uniform grid's, the kd-tree's and the triangle octree's switches beyond their defaults: the
+/// grid's cells in Morton order (dilated steps in WGSL, at the default density and on a grid of a
+/// few cells walked without bricks), kd-restart and ropes (each with its fall-back to the stack
+/// walk), the kd-tree without perfect splits, and the octree with bounding-box lists, without
+/// mailboxing, and with one triangle per leaf. The GPU must also take the CPU's steps: the counted
+/// steps per ray are equal.
 #[test]
 fn kdtree_and_octree_variants() {
     let Some(ctx) = context_for_tests("gpu::kdtree_and_octree_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 6] = [
+    let variants: [(&str, &str, &[&str]); 8] = [
+        ("ug-morton", "ug", &["ug.order=morton"]),
+        ("ug-morton-few", "ug", &["ug.order=morton", "ug.lambda=0.0005"]),
         ("kd-restart", "kdtree", &["kdtree.traversal=restart"]),
         ("kd-ropes", "kdtree", &["kdtree.traversal=ropes"]),
         ("kd-nopsplit", "kdtree", &["kdtree.perfect_splits=off"]),
@@ -362,7 +366,7 @@ fn kdtree_and_octree_variants() {
             }
         }
     }
-    assert!(failures.is_empty(), "kd-tree/octree variants differ from the CPU:\n{}", failures.join("\n"));
+    assert!(failures.is_empty(), "kd-tree/octree/grid variants differ from the CPU:\n{}", failures.join("\n"));
 }
 
 /// The tie rule on the GPU: over a stack of coplanar triangles seen head-on, where many pixels

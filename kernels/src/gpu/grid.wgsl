@@ -6,8 +6,10 @@
 //
 // Buffers (structures::grid::layout, uploaded as stored):
 // - `headers`: GridHeader, 16 words each: min.xyz, first_cell, max.xyz, depth, cell_size.xyz,
-//   first_brick, res.xyz, pad. Header 0 is the top grid.
-// - `cells`: per grid, res.x·res.y·res.z + 1 prefix-summed offsets into `refs`.
+//   first_brick, res.xyz, order. Header 0 is the top grid.
+// - `cells`: per grid, res.x·res.y·res.z + 1 prefix-summed offsets into `refs`, cells numbered
+//   row-major; or, for a top grid whose order is ORDER_MORTON (`ug.order=morton`), one offset
+//   per cell of its padded power-of-two box, numbered by its Morton order (the padding empty).
 // - `refs`: triangle ids; or, alone in its cell, SUBGRID_BIT | the sub-grid's header index.
 // - `bricks`: per grid from word `first_brick`, one occupancy bit per brick of 4×4×4 cells, set
 //   exactly when one of its cells holds a reference; the DDA steps empty bricks whole.
@@ -19,6 +21,7 @@
 const GRID_MAX_DEPTH: u32 = 8u;
 const BRICK_SHIFT: u32 = 2u;
 const SUBGRID_BIT: u32 = 0x80000000u;
+const ORDER_MORTON: u32 = 1u;
 // cpu::grid's HIT_MARGIN, 1/8192: traversal stops only once the best hit lies this far inside the
 // cells visited, so a nearer-by-a-few-ulps triangle listed only in the next cell is not skipped.
 const HIT_MARGIN: f32 = 0.0001220703125;
@@ -30,6 +33,7 @@ struct GridHeader {
     cell_size: vec3<f32>,
     first_brick: u32,
     res: vec3<u32>,
+    order: u32,
 }
 
 fn grid_header(h: u32) -> GridHeader {
@@ -41,7 +45,57 @@ fn grid_header(h: u32) -> GridHeader {
         vec3<f32>(bitcast<f32>(headers(w + 8u)), bitcast<f32>(headers(w + 9u)), bitcast<f32>(headers(w + 10u))),
         headers(w + 11u),
         vec3<u32>(headers(w + 12u), headers(w + 13u), headers(w + 14u)),
+        headers(w + 15u),
     );
+}
+
+// The bits of each axis's coordinate in a Morton index of grid `h` (voxel::morton::Interleave:
+// x's, y's and z's bits interleaved level by level while each axis has bits left, ⌈log2 res⌉
+// each); all ones for a grid in row-major order, whose steps add a stride. Only the top grid can be
+// in Morton order (the builder refuses it for a hierarchy), so one set serves a ray.
+var<private> morton_masks: vec3<u32>;
+
+fn cell_masks(h: GridHeader) -> vec3<u32> {
+    if (h.order != ORDER_MORTON) {
+        return vec3<u32>(0xffffffffu);
+    }
+    let bits = vec3<u32>(32u) - countLeadingZeros(h.res - vec3<u32>(1u));
+    var masks = vec3<u32>(0u);
+    var position = 0u;
+    for (var i = 0u; i < max(max(bits.x, bits.y), bits.z); i++) {
+        for (var a = 0u; a < 3u; a++) {
+            if (i < bits[a]) {
+                masks[a] |= 1u << position;
+                position += 1u;
+            }
+        }
+    }
+    return masks;
+}
+
+// `v`'s low bits placed, in order, on the set bits of `mask` (pdep).
+fn deposit(v: u32, mask: u32) -> u32 {
+    var out = 0u;
+    var m = mask;
+    var k = 0u;
+    while (m != 0u) {
+        let low = m & (~m + 1u);
+        if (((v >> k) & 1u) != 0u) {
+            out |= low;
+        }
+        m &= m - 1u;
+        k += 1u;
+    }
+    return out;
+}
+
+// The index mask of a DDA's steps on its axes: the Morton masks for a cell DDA of a grid in
+// Morton order, all ones otherwise (Interleave::step with an all-ones mask is the plain add).
+fn step_masks(h: GridHeader, shift: u32) -> vec3<u32> {
+    if (shift == 0u && h.order == ORDER_MORTON) {
+        return morton_masks;
+    }
+    return vec3<u32>(0xffffffffu);
 }
 
 // Lower corner of cell `i` along `axis`: GridHeader::boundary, the one formula every user of the
@@ -130,12 +184,19 @@ fn dda_level(
     units: vec3<u32>, t_in: f32,
 ) -> Level {
     let stride = vec3<u32>(1u, units.x, units.x * units.y);
-    let delta = stride * bitcast<vec3<u32>>(r.step);
+    var delta = stride * bitcast<vec3<u32>>(r.step);
+    var index = dot(stride, cell);
     var t_next = vec3<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
         t_next[a] = exit_t(r, h, a, cell[a], shift);
     }
-    return Level(header, shift, cell, lo, span, dot(stride, cell), delta, t_in, t_next);
+    if (shift == 0u && h.order == ORDER_MORTON) {
+        // Interleave::encode and step_addend: −mask steps up an axis, all ones steps down.
+        let m = morton_masks;
+        index = deposit(cell.x, m.x) | deposit(cell.y, m.y) | deposit(cell.z, m.z);
+        delta = select(select(vec3<u32>(0u), vec3<u32>(0xffffffffu), r.step < vec3<i32>(0)), ~m + vec3<u32>(1u), r.step > vec3<i32>(0));
+    }
+    return Level(header, shift, cell, lo, span, index, delta, t_in, t_next);
 }
 
 // The DDA of grid `header` (already loaded as `h`) for a ray entering it at `t_in`: over its
@@ -187,7 +248,9 @@ fn advance(r: DdaRay, h: GridHeader, lv: ptr<function, Level>) -> bool {
         return false;
     }
     (*lv).cell[a] = c;
-    (*lv).index += (*lv).delta[a];
+    // Interleave::step: a dilated increment under the axis's mask (a plain add under all ones).
+    let m = step_masks(h, (*lv).shift)[a];
+    (*lv).index = ((((*lv).index & m) + (*lv).delta[a]) & m) | ((*lv).index & ~m);
     (*lv).t_in = t;
     (*lv).t_next[a] = exit_t(r, h, a, c, (*lv).shift);
     return true;
@@ -210,6 +273,7 @@ fn trace(ray: Ray, index: u32) -> TraceResult {
     }
     let r = dda_ray(ray);
     let top = grid_header(0u);
+    morton_masks = cell_masks(top);
     let clip = slab_span(r.origin, r.inv, top.lo, top.hi, ray.t_min, ray.t_max);
     if (!enters(clip)) {
         return no_hit();

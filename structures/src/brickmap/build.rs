@@ -15,7 +15,9 @@ use crate::{BuildError, BuildInput};
 pub fn build(input: &BuildInput) -> Result<Brickmap, BuildError> {
     let level = level_param(input.params)?;
     let order = order_param(input.params)?;
-    Ok(build_at(input, level, order))
+    let mut map = build_at(input, level, order);
+    map.morton = Morton::from_params(input.params)?;
+    Ok(map)
 }
 
 /// The brickmap of `input`'s scene at voxel level `level` (checked), its top grid in `order`.

@@ -67,7 +67,7 @@ pub struct Brickmap {
 }
 
 /// The brickmap's parameters besides the level.
-pub const KEYS: [&str; 2] = ["voxel.levels", "brickmap.order"];
+pub const KEYS: [&str; 3] = ["voxel.levels", "brickmap.order", crate::voxel::morton::ENCODER_KEY];
 
 /// The top grid's order (`brickmap.order`: `linear`, the default, or `morton`).
 pub fn order_param(params: &crate::Params) -> Result<CellOrder, BuildError> {

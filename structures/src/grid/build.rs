@@ -15,6 +15,7 @@ use super::resolution::{algorithm2, cells, eq1};
 use super::{BetaRule, BuildPhases, CellLayout, CellTest, GammaTest, Grid, GridKind, LevelStats, Packets};
 use crate::ms_since;
 use crate::simd::SimdChoice;
+use crate::voxel::morton::{CellOrder, Morton};
 use crate::{BuildError, BuildInput};
 
 /// The deepest hierarchy any kind builds (seed 002 §2: MAXDEPTH = 4 × 2 = 8); the kernels'
@@ -130,10 +131,10 @@ struct Split {
 /// will lay them out, in one pass and without allocating the grid: what the harness's memory
 /// budget needs before a build (a λ or a scene that asks for billions of references is refused,
 /// not attempted). Sub-grids add at most [`MAX_REFS`] references on top.
-pub fn estimate_top(tris: &[Triangle], kind: GridKind) -> (u64, u64) {
+pub fn estimate_top(tris: &[Triangle], kind: GridKind) -> ([u32; 3], u64) {
     let (bboxes, bounds, all) = top_input(tris);
     let h = header(bounds, top_resolution(kind, &all, &bboxes, &bounds), 1);
-    (crate::grid::resolution::cells(h.res), count_refs(&h, &all, &bboxes))
+    (h.res, count_refs(&h, &all, &bboxes))
 }
 
 /// What the top grid is built from: every triangle's bounding box, their union (a point at the
@@ -167,6 +168,15 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
         &[("refs", CellLayout::Refs), ("blocks", CellLayout::Blocks)],
     )?;
     let packets = Packets::from_params(kind.name(), input.params)?;
+    // Only the one-grid kind has a cell order (and with it the encoder's key).
+    let encoder = match kind {
+        GridKind::Ug { .. } => {
+            let order = super::order_param(kind.name(), input.params)?;
+            let encoder = Morton::from_params(input.params)?;
+            (order == CellOrder::Morton).then_some(encoder)
+        }
+        _ => None,
+    };
     let tris = &input.triangles;
     if tris.len() >= SUBGRID_BIT as usize {
         return Err(BuildError::Limit {
@@ -183,6 +193,9 @@ pub fn build(input: &BuildInput, kind: GridKind) -> Result<Grid, BuildError> {
     grid.packets = packets;
     grid.levels = levels;
     grid.budget_stop = budget_stop;
+    if let Some(encoder) = encoder {
+        grid.order_cells_morton(encoder)?;
+    }
     if layout == CellLayout::Blocks {
         grid.copy_into_blocks()?;
     }

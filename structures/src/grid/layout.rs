@@ -1,9 +1,12 @@
 //! The compact layout shared by every grid (UG, RG, RG-2, ORG), exactly as the kernels read it:
 //!
 //! - `headers`: one [`GridHeader`] per (sub-)grid; header 0 is the top grid.
-//! - `cells`: for each grid, `M + 1` prefix-summed `u32` offsets into `refs`
-//!   (M = res.x · res.y · res.z); cell `c` covers `refs[cells[first + c]..cells[first + c + 1]]`,
-//!   cells numbered `x + res.x · (y + res.y · z)`.
+//! - `cells`: for each grid, `M + 1` prefix-summed `u32` offsets into `refs`; cell `c` covers
+//!   `refs[cells[first + c]..cells[first + c + 1]]`. In row-major order (every grid by default)
+//!   M = res.x · res.y · res.z and cells are numbered `x + res.x · (y + res.y · z)`; a grid whose
+//!   header says [`ORDER_MORTON`] (`ug.order=morton`, issue 43) numbers them by the Morton order of
+//!   the smallest power-of-two box holding it (`voxel::morton::Interleave`), M is that box's
+//!   cell count, and its padding cells are empty.
 //! - `refs`: triangle ids; or, alone in its cell, [`SUBGRID_BIT`] | the index of the sub-grid
 //!   header that refines the cell.
 //! - `bricks`: for each grid, one occupancy bit per brick of `4 × 4 × 4` cells (`2^BRICK_SHIFT`
@@ -26,6 +29,11 @@ pub const SUBGRID_BIT: u32 = 1 << 31;
 /// A brick is `2^BRICK_SHIFT` cells along each axis.
 pub const BRICK_SHIFT: u32 = 2;
 
+/// [`GridHeader::order`]: cells numbered row-major, x fastest.
+pub const ORDER_ROW_MAJOR: u32 = 0;
+/// [`GridHeader::order`]: cells numbered in the Morton order of the grid's padded power-of-two box.
+pub const ORDER_MORTON: u32 = 1;
+
 /// One (sub-)grid, 64 bytes (16 `u32` words on the GPU).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -44,7 +52,8 @@ pub struct GridHeader {
     pub first_brick: u32,
     /// Cells per axis, each ≥ 1.
     pub res: [u32; 3],
-    pub _pad1: u32,
+    /// How `cells` numbers this grid's cells: [`ORDER_ROW_MAJOR`] or [`ORDER_MORTON`].
+    pub order: u32,
 }
 
 const _: () = assert!(size_of::<GridHeader>() == 64);
@@ -88,7 +97,17 @@ impl GridHeader {
         (x * y * z).div_ceil(32)
     }
 
-    /// Linear index of cell (x, y, z).
+    /// Entries of this grid's offset table less one: its cells, and in Morton order the padding
+    /// up to the power-of-two box.
+    #[inline]
+    pub fn table_len(&self) -> u32 {
+        match self.order {
+            ORDER_MORTON => self.res.iter().map(|r| r.next_power_of_two()).product(),
+            _ => self.cell_count(),
+        }
+    }
+
+    /// Row-major index of cell (x, y, z) (the index in `cells` of a grid in [`ORDER_ROW_MAJOR`]).
     #[inline]
     pub fn cell_index(&self, x: u32, y: u32, z: u32) -> u32 {
         x + self.res[0] * (y + self.res[1] * z)
@@ -102,21 +121,21 @@ impl GridHeader {
     }
 }
 
-/// The brick occupancy words of grid `h` from its `M + 1` offsets: a brick's bit is set exactly
-/// when one of its cells is non-empty.
-pub fn occupancy(h: &GridHeader, offsets: &[u32]) -> Vec<u32> {
+/// The brick occupancy words of grid `h` from its offsets, cell (x, y, z) at `index([x, y, z])`:
+/// a brick's bit is set exactly when one of its cells is non-empty. Bricks are numbered row-major
+/// in either cell order.
+pub fn occupancy(h: &GridHeader, offsets: &[u32], index: impl Fn([u32; 3]) -> u32) -> Vec<u32> {
     let [bx, by, _] = h.brick_res();
     let mut words = vec![0u32; h.brick_words() as usize];
-    let mut c = 0usize;
     for z in 0..h.res[2] {
         for y in 0..h.res[1] {
             let row = bx * ((y >> BRICK_SHIFT) + by * (z >> BRICK_SHIFT));
             for x in 0..h.res[0] {
+                let c = index([x, y, z]) as usize;
                 if offsets[c] != offsets[c + 1] {
                     let b = row + (x >> BRICK_SHIFT);
                     words[(b / 32) as usize] |= 1 << (b % 32);
                 }
-                c += 1;
             }
         }
     }

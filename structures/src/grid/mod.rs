@@ -29,9 +29,10 @@ use serde::Serialize;
 
 use crate::bvh4::layout::{Tri4, WIDTH};
 use crate::simd::{Isa, Resolved};
+use crate::voxel::morton::{CellOrder, Interleave, Morton};
 use crate::{MemoryReport, Structure};
 pub use build::{MAX_DEPTH, MAX_REFS, build};
-pub use layout::{BRICK_SHIFT, GridHeader, SUBGRID_BIT};
+pub use layout::{BRICK_SHIFT, GridHeader, ORDER_MORTON, ORDER_ROW_MAJOR, SUBGRID_BIT};
 
 /// Which member of the family, and its parameters (defaults: seed 002 §3 and docs/design.md §4.5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -198,6 +199,7 @@ pub struct LevelStats {
 }
 
 /// A built grid: the layout plus the statistics of its build.
+#[derive(Clone)]
 pub struct Grid {
     pub kind: GridKind,
     pub headers: Vec<GridHeader>,
@@ -225,6 +227,22 @@ pub struct Grid {
     pub cell_blocks: Vec<u32>,
     /// Where this build's time went.
     pub phases: BuildPhases,
+    /// The top grid's cells in Morton order ([`Grid::order_cells_morton`]); `None` row-major.
+    pub morton: Option<MortonCells>,
+}
+
+/// How a grid in Morton order ([`ORDER_MORTON`]) numbers its cells: the interleave of its padded
+/// box, and the encoder that computes a DDA's start index (`pdep` or byte tables; the steps are
+/// dilated increments either way).
+#[derive(Clone, Debug)]
+pub struct MortonCells {
+    pub interleave: Interleave,
+    pub encoder: Morton,
+}
+
+/// The order of a kind's cell table (`<kind>.order`; only `ug`, the one-grid kind, has one).
+pub fn order_param(kind: &str, params: &crate::Params) -> Result<CellOrder, crate::BuildError> {
+    params.choice(&format!("{kind}.order"), CellOrder::Linear, &CellOrder::NAMES)
 }
 
 /// Where a grid build's wall time went, in ms, on the build's threads: what the report names
@@ -260,7 +278,7 @@ impl Grid {
         let mut bricks = Vec::new();
         for h in &mut headers {
             h.first_brick = bricks.len() as u32;
-            bricks.extend(layout::occupancy(h, &cells[h.first_cell as usize..]));
+            bricks.extend(layout::occupancy(h, &cells[h.first_cell as usize..], |[x, y, z]| h.cell_index(x, y, z)));
         }
         Grid {
             kind,
@@ -277,14 +295,80 @@ impl Grid {
             blocks: Vec::new(),
             cell_blocks: Vec::new(),
             phases: BuildPhases::default(),
+            morton: None,
         }
+    }
+
+    /// Renumbers the cells of a one-grid layout (`ug`) in the Morton order of its padded
+    /// power-of-two box ([`Interleave`]): every cell keeps its references, in order; the padding
+    /// cells are empty; the brick bits, numbered row-major, do not change. Refused for a
+    /// hierarchy (its sub-grids would need an order each), after [`Grid::copy_into_blocks`], and
+    /// for a box of more than 2³² cells.
+    pub fn order_cells_morton(&mut self, encoder: Morton) -> Result<(), crate::BuildError> {
+        let refuse = |detail: String| Err(crate::BuildError::Limit { structure: self.kind.name(), detail });
+        if self.headers.len() != 1 || self.layout != CellLayout::Refs || self.morton.is_some() {
+            return refuse("Morton order is built for a one-grid layout of references".into());
+        }
+        let h = self.headers[0];
+        let Some(interleave) = Interleave::new(h.res) else {
+            return refuse(format!("a top grid of {:?} cells pads to more than 2^32 in Morton order", h.res));
+        };
+        let len = interleave.len() as usize;
+        // The row-major cell at each Morton index, u32::MAX for padding.
+        let mut row_major = vec![u32::MAX; len];
+        let mut c = 0;
+        for z in 0..h.res[2] {
+            for y in 0..h.res[1] {
+                for x in 0..h.res[0] {
+                    row_major[interleave.encode(encoder, [x, y, z]) as usize] = c;
+                    c += 1;
+                }
+            }
+        }
+        let mut cells = Vec::with_capacity(len + 1);
+        let mut refs = Vec::with_capacity(self.refs.len());
+        for &c in &row_major {
+            cells.push(refs.len() as u32);
+            if c != u32::MAX {
+                refs.extend_from_slice(
+                    &self.refs[self.cells[c as usize] as usize..self.cells[c as usize + 1] as usize],
+                );
+            }
+        }
+        cells.push(refs.len() as u32);
+        self.cells = cells;
+        self.refs = refs;
+        self.headers[0].order = ORDER_MORTON;
+        self.morton = Some(MortonCells { interleave, encoder });
+        Ok(())
+    }
+
+    /// The index in grid `h`'s offsets of cell `c`, in the grid's order.
+    #[inline]
+    pub fn cell_index(&self, h: &GridHeader, c: [u32; 3]) -> u32 {
+        match (&self.morton, h.order) {
+            (Some(m), ORDER_MORTON) => m.interleave.encode(m.encoder, c),
+            _ => h.cell_index(c[0], c[1], c[2]),
+        }
+    }
+
+    /// The cell at index `i` of grid `h`'s offsets, `None` for a padding entry.
+    pub fn cell_at(&self, h: &GridHeader, i: u32) -> Option<[u32; 3]> {
+        let c = match (&self.morton, h.order) {
+            (Some(m), ORDER_MORTON) => m.interleave.decode(i),
+            _ => {
+                let (rx, ry) = (h.res[0], h.res[1]);
+                [i % rx, (i / rx) % ry, i / (rx * ry)]
+            }
+        };
+        (0..3).all(|a| c[a] < h.res[a]).then_some(c)
     }
 
     /// Stores every cell's triangles as blocks too ([`CellLayout::Blocks`]); refused past
     /// [`MAX_BLOCKS`].
     pub fn copy_into_blocks(&mut self) -> Result<(), crate::BuildError> {
         let count = |h: &GridHeader| {
-            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.cell_count()) as usize];
+            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.table_len()) as usize];
             offsets.windows(2).map(|w| (w[1] - w[0]).div_ceil(WIDTH as u32) as u64).sum::<u64>()
         };
         let wanted: u64 = self.headers.iter().map(count).sum();
@@ -300,7 +384,7 @@ impl Grid {
         let mut blocks = Vec::with_capacity(wanted as usize);
         let mut cell_blocks = Vec::with_capacity(self.cells.len());
         for h in &self.headers {
-            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.cell_count()) as usize];
+            let offsets = &self.cells[h.first_cell as usize..=(h.first_cell + h.table_len()) as usize];
             for w in offsets.windows(2) {
                 cell_blocks.push(blocks.len() as u32);
                 let refs = &self.refs[w[0] as usize..w[1] as usize];
@@ -334,12 +418,18 @@ impl Structure for Grid {
 
     fn memory(&self) -> MemoryReport {
         let links = self.headers.len().saturating_sub(1) as u64;
+        let padding: u64 = self.headers.iter().map(|h| u64::from(h.table_len() - h.cell_count())).sum();
         let report = MemoryReport::new(self.cell_count(), self.triangle_ref_count())
-            .with("cells", (self.cells.len() * size_of::<u32>()) as u64)
+            .with("cells", (self.cells.len() as u64 - padding) * size_of::<u32>() as u64)
             .with("references", self.triangle_ref_count() * size_of::<u32>() as u64)
             .with("sub-grid links", links * size_of::<u32>() as u64)
             .with("sub-grid headers", (self.headers.len() * size_of::<GridHeader>()) as u64)
             .with("brick occupancy", (self.bricks.len() * size_of::<u32>()) as u64);
+        // The empty cells a Morton order pads the grid's box with, apart from the cells proper.
+        let report = match padding {
+            0 => report,
+            _ => report.with("Morton padding", padding * size_of::<u32>() as u64),
+        };
         match self.layout {
             CellLayout::Refs => report,
             CellLayout::Blocks => report
@@ -368,6 +458,9 @@ impl Structure for Grid {
             "simd": self.isa.name(),
             "layout": self.layout,
             "packet": self.packets,
+            "order": if self.morton.is_some() { CellOrder::Morton.name() } else { CellOrder::Linear.name() },
+            "morton_encoder": self.morton.as_ref().map(|m| m.encoder.name()),
+            "morton_padding": self.morton.as_ref().map(|m| m.interleave.len() as f64 / f64::from(self.headers[0].cell_count())),
             "phases_ms": self.phases,
         })
     }

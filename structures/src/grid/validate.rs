@@ -16,9 +16,14 @@ impl Grid {
         let mut linked = vec![0u32; self.headers.len()];
         let mut listed = vec![false; self.triangles.len()];
         for (g, h) in self.headers.iter().enumerate() {
-            let m = h.cell_count() as usize;
+            let m = h.table_len() as usize;
             let first = h.first_cell as usize;
             let offsets = self.cells.get(first..first + m + 1).ok_or(format!("grid {g}: cells out of range"))?;
+            match (h.order, &self.morton) {
+                (super::ORDER_ROW_MAJOR, _) if g > 0 || self.morton.is_none() => {}
+                (super::ORDER_MORTON, Some(mc)) if g == 0 && mc.interleave.len() == m as u64 => {}
+                _ => return Err(format!("grid {g}: order {} without its interleave", h.order)),
+            }
             if offsets.windows(2).any(|w| w[0] > w[1]) || offsets[m] as usize > self.refs.len() {
                 return Err(format!("grid {g}: offsets are not a prefix sum inside refs"));
             }
@@ -26,11 +31,17 @@ impl Grid {
                 .bricks
                 .get(h.first_brick as usize..(h.first_brick + h.brick_words()) as usize)
                 .ok_or(format!("grid {g}: brick words out of range"))?;
-            if words != occupancy(h, offsets) {
+            if words != occupancy(h, offsets, |c| self.cell_index(h, c)) {
                 return Err(format!("grid {g}: brick occupancy bits differ from its cells"));
             }
             for c in 0..m {
                 let refs = &self.refs[offsets[c] as usize..offsets[c + 1] as usize];
+                let Some(idx) = self.cell_at(h, c as u32) else {
+                    if !refs.is_empty() {
+                        return Err(format!("grid {g}: padding entry {c} holds references"));
+                    }
+                    continue;
+                };
                 self.check_blocks(first + c, refs).map_err(|e| format!("grid {g} cell {c}: {e}"))?;
                 for &r in refs {
                     if r & SUBGRID_BIT == 0 {
@@ -48,8 +59,6 @@ impl Grid {
                     if sub.depth != h.depth + 1 {
                         return Err(format!("grid {child}: depth {} under a depth-{} parent", sub.depth, h.depth));
                     }
-                    let (rx, ry) = (h.res[0], h.res[1]);
-                    let idx = [c as u32 % rx, (c as u32 / rx) % ry, c as u32 / (rx * ry)];
                     for a in 0..3 {
                         if sub.min[a] != h.boundary(a, idx[a]) || sub.max[a] != h.boundary(a, idx[a] + 1) {
                             return Err(format!("grid {child}: box differs from parent cell {c} of grid {g}"));

@@ -191,10 +191,171 @@ pub fn encode_table(x: u32, y: u32, z: u32) -> u64 {
     spread_by_table(x) | spread_by_table(y) << 1 | spread_by_table(z) << 2
 }
 
+impl Morton {
+    /// The encoder `morton.encoder` asks for: `auto` ([`Morton::detect`]) or `table` (the table
+    /// even where the CPU has BMI2, to price `pdep` against it).
+    pub fn from_params(params: &crate::Params) -> Result<Self, crate::BuildError> {
+        let table = params.choice(ENCODER_KEY, false, &[("auto", false), ("table", true)])?;
+        Ok(if table { Morton::table() } else { Morton::detect() })
+    }
+}
+
+/// The parameter that forces the table encoder (see [`Morton::from_params`]).
+pub const ENCODER_KEY: &str = "morton.encoder";
+
+/// The Morton order of a box of `2^bits[0] × 2^bits[1] × 2^bits[2]` cells, the axes' bits
+/// interleaved as long as each has bits left (x, then y, then z at every level; an axis whose bits
+/// are used up drops out). It is the Z-curve of a non-cubic power-of-two box ("spread the bits
+/// unequally", issue 43's anchors): the cube's Morton index with the bit positions an exhausted
+/// axis would own removed, so a grid of `res` cells pays at most 2× per axis in padding instead
+/// of the cube's `max(res)³`. A cell's index is `deposit(x, mask[0]) | deposit(y, mask[1]) |
+/// deposit(z, mask[2])`; a step along one axis is a dilated-integer increment under its mask
+/// ([`Interleave::step`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Interleave {
+    bits: [u32; 3],
+    masks: [u32; 3],
+    /// `deposits[3·j + a][b]`: byte `b` of axis `a`'s coordinate at byte position `j`, deposited
+    /// into `masks[a]` (the table encoder's lookups, four bytes deep).
+    deposits: Box<[[u32; 256]; 12]>,
+}
+
+impl Interleave {
+    /// The order of the smallest power-of-two box holding `res` cells (each ≥ 1), or `None` if its
+    /// index would not fit 32 bits.
+    pub fn new(res: [u32; 3]) -> Option<Self> {
+        let bits = res.map(|r| r.max(1).next_power_of_two().trailing_zeros());
+        if bits.iter().sum::<u32>() > 32 {
+            return None;
+        }
+        let mut masks = [0u32; 3];
+        let mut position = 0;
+        for level in 0..bits.iter().max().copied().unwrap_or(0) {
+            for a in 0..3 {
+                if level < bits[a] {
+                    masks[a] |= 1 << position;
+                    position += 1;
+                }
+            }
+        }
+        let mut deposits = Box::new([[0u32; 256]; 12]);
+        for j in 0..4 {
+            for a in 0..3 {
+                for b in 0..256u32 {
+                    deposits[3 * j + a][b as usize] = deposit_bit_by_bit(b << (8 * j), masks[a]);
+                }
+            }
+        }
+        Some(Interleave { bits, masks, deposits })
+    }
+
+    /// Bits per axis: `⌈log₂ res⌉`.
+    pub fn bits(&self) -> [u32; 3] {
+        self.bits
+    }
+
+    /// The bit positions of each axis's coordinate in an index.
+    pub fn masks(&self) -> [u32; 3] {
+        self.masks
+    }
+
+    /// Indices the order spans: the padded box's cells.
+    pub fn len(&self) -> u64 {
+        1 << self.bits.iter().sum::<u32>()
+    }
+
+    /// Whether the box has no cells (never: a box has at least one).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The index of cell `c` (each coordinate below `2^bits`), by `morton`'s encoder.
+    #[inline(always)]
+    pub fn encode(&self, morton: Morton, c: [u32; 3]) -> u32 {
+        debug_assert!((0..3).all(|a| u64::from(c[a]) < 1u64 << self.bits[a]));
+        #[cfg(target_arch = "x86_64")]
+        if morton.bmi2 {
+            // SAFETY: `bmi2` is true only where `detect` found BMI2 on this CPU.
+            #[allow(unsafe_code)]
+            return unsafe { bmi2::deposit3(c, self.masks) };
+        }
+        self.encode_by_table(c)
+    }
+
+    /// The index of cell `c` by the byte tables: one lookup per byte of each coordinate.
+    #[inline(always)]
+    fn encode_by_table(&self, c: [u32; 3]) -> u32 {
+        let mut index = 0;
+        for (a, &v) in c.iter().enumerate() {
+            let mut v = v;
+            let mut j = 0;
+            while v != 0 {
+                index |= self.deposits[3 * j + a][(v & 0xff) as usize];
+                v >>= 8;
+                j += 1;
+            }
+        }
+        index
+    }
+
+    /// The cell of index `i`, which may lie in the padding past the grid (the caller checks).
+    pub fn decode(&self, i: u32) -> [u32; 3] {
+        self.masks.map(|m| extract_bit_by_bit(i, m))
+    }
+
+    /// What [`Interleave::step`] adds on axis `a` to move one cell by `dir` (±1; 0 gives 0):
+    /// `−mask` to increment (its complement's carry runs through the other axes' bits), all ones
+    /// to decrement.
+    #[inline(always)]
+    pub fn step_addend(&self, a: usize, dir: i32) -> u32 {
+        match dir {
+            0 => 0,
+            d if d > 0 => self.masks[a].wrapping_neg(),
+            _ => u32::MAX,
+        }
+    }
+
+    /// Index `i` moved one cell along the axis of `mask` by `addend` ([`Interleave::step_addend`]):
+    /// the axis's dilated coordinate plus one or minus one, the other axes' bits kept. Wrong only
+    /// past the padded box's faces, which a DDA never steps onto.
+    #[inline(always)]
+    pub fn step(i: u32, mask: u32, addend: u32) -> u32 {
+        ((i & mask).wrapping_add(addend) & mask) | (i & !mask)
+    }
+}
+
+/// `v`'s low bits placed, in order, on the set bits of `mask` (`pdep`'s definition, bit by bit).
+pub fn deposit_bit_by_bit(v: u32, mask: u32) -> u32 {
+    let (mut out, mut m, mut k) = (0u32, mask, 0);
+    while m != 0 {
+        let low = m & m.wrapping_neg();
+        if v >> k & 1 != 0 {
+            out |= low;
+        }
+        m &= m - 1;
+        k += 1;
+    }
+    out
+}
+
+/// The bits of `i` under `mask`, gathered into the low bits (`pext`'s definition, bit by bit).
+pub fn extract_bit_by_bit(i: u32, mask: u32) -> u32 {
+    let (mut out, mut m, mut k) = (0u32, mask, 0);
+    while m != 0 {
+        let low = m & m.wrapping_neg();
+        if i & low != 0 {
+            out |= 1 << k;
+        }
+        m &= m - 1;
+        k += 1;
+    }
+    out
+}
+
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod bmi2 {
-    use std::arch::x86_64::_pdep_u64;
+    use std::arch::x86_64::{_pdep_u32, _pdep_u64};
 
     use super::X_MASK;
 
@@ -205,6 +366,15 @@ mod bmi2 {
     #[target_feature(enable = "bmi2")]
     pub(super) unsafe fn encode(x: u32, y: u32, z: u32) -> u64 {
         _pdep_u64(u64::from(x), X_MASK) | _pdep_u64(u64::from(y), X_MASK << 1) | _pdep_u64(u64::from(z), X_MASK << 2)
+    }
+
+    /// The index of cell `c` in an [`super::Interleave`] of `masks`, by `pdep`.
+    ///
+    /// # Safety
+    /// The CPU must have BMI2 (`Morton::detect` checks it).
+    #[target_feature(enable = "bmi2")]
+    pub(super) unsafe fn deposit3(c: [u32; 3], masks: [u32; 3]) -> u32 {
+        _pdep_u32(c[0], masks[0]) | _pdep_u32(c[1], masks[1]) | _pdep_u32(c[2], masks[2])
     }
 }
 
@@ -258,6 +428,96 @@ mod encoder_tests {
         }
         let top = (1u32 << MAX_BITS) - 1;
         assert_eq!(encode_table(top, top, top), (1u64 << 63) - 1, "the largest cell fills 63 bits");
+    }
+
+    /// The non-cubic order by its definition, one coordinate bit at a time: at level `i`, x's,
+    /// y's and z's bit `i` take the next free positions, skipping an axis with fewer bits.
+    fn interleave_unequal_bit_by_bit(c: [u32; 3], bits: [u32; 3]) -> u32 {
+        let (mut out, mut position) = (0u32, 0);
+        for i in 0..32 {
+            for a in 0..3 {
+                if i < bits[a] {
+                    out |= (c[a] >> i & 1) << position;
+                    position += 1;
+                }
+            }
+        }
+        out
+    }
+
+    /// Grid shapes up to the largest an [`Interleave`] holds (32 bits of index), cubic and not.
+    const SHAPES: [[u32; 3]; 9] = [
+        [1, 1, 1],
+        [7, 1, 1],
+        [3, 5, 9],
+        [100, 37, 60],
+        [1 << 11, 1 << 11, 1 << 10],
+        [(1 << 11) - 3, 1 << 9, (1 << 11) + 5],
+        [1 << 16, 1 << 8, 1 << 8],
+        [1 << 20, 3, 1 << 10],
+        [1 << 31, 2, 1],
+    ];
+
+    #[test]
+    fn the_non_cubic_order_interleaves_bit_by_bit_up_to_32_bits() {
+        let encoders = [Morton::table(), Morton::detect()];
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        for res in SHAPES {
+            let il = Interleave::new(res).expect("fits 32 bits");
+            let bits = il.bits();
+            assert!(il.len() >= res.iter().map(|&r| u64::from(r)).product::<u64>());
+            assert_eq!(il.masks().iter().fold(0u64, |all, &m| all | u64::from(m)), il.len() - 1, "{res:?}");
+            let top = res.map(|r| r - 1);
+            let mut cells = vec![[0; 3], top, [top[0], 0, top[2]], [0, top[1], 0]];
+            for _ in 0..20_000 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                cells.push([0, 1, 2].map(|a| ((state >> (20 * a)) % u64::from(res[a])) as u32));
+            }
+            for c in cells {
+                let expected = interleave_unequal_bit_by_bit(c, bits);
+                for morton in encoders {
+                    assert_eq!(il.encode(morton, c), expected, "{} {res:?} {c:?}", morton.name());
+                }
+                assert_eq!(il.decode(expected), c);
+                // A step on each axis, both ways, is the neighbour's index.
+                for a in 0..3 {
+                    for dir in [-1i32, 1] {
+                        let Some(n) = c[a].checked_add_signed(dir).filter(|&n| n < res[a]) else { continue };
+                        let mut next = c;
+                        next[a] = n;
+                        let stepped = Interleave::step(expected, il.masks()[a], il.step_addend(a, dir));
+                        assert_eq!(stepped, interleave_unequal_bit_by_bit(next, bits), "{res:?} {c:?} axis {a} {dir}");
+                    }
+                }
+            }
+        }
+        assert!(Interleave::new([1 << 11, 1 << 11, (1 << 10) + 1]).is_none(), "33 bits of index are refused");
+    }
+
+    #[test]
+    fn a_cubic_order_is_the_morton_code() {
+        let il = Interleave::new([1 << 10; 3]).expect("30 bits");
+        for (x, y, z) in samples().into_iter().map(|(x, y, z)| (x & 1023, y & 1023, z & 1023)).take(5_000) {
+            assert_eq!(u64::from(il.encode(Morton::detect(), [x, y, z])), encode_table(x, y, z));
+        }
+    }
+
+    #[test]
+    fn a_non_cubic_order_visits_every_cell_of_its_box_once() {
+        let il = Interleave::new([5, 16, 3]).expect("fits");
+        assert_eq!(il.len(), 8 * 16 * 4);
+        let mut seen = vec![false; il.len() as usize];
+        for z in 0..4 {
+            for y in 0..16 {
+                for x in 0..8 {
+                    let i = il.encode(Morton::table(), [x, y, z]) as usize;
+                    assert!(!std::mem::replace(&mut seen[i], true), "({x}, {y}, {z}) maps to a taken index {i}");
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s));
     }
 
     #[test]

@@ -292,7 +292,7 @@ impl<T: TriangleLanes> Packet<'_, T> {
                             continue;
                         }
                     }
-                    let index = h.cell_index(c[0], c[1], c[2]);
+                    let index = grid.cell_index(h, c);
                     if cell_is_empty(grid, h, index) {
                         continue;
                     }
