@@ -154,6 +154,13 @@ pub enum Preset {
     /// the steps are taken, bytes per voxel by component, build time and peak. Builds timed once,
     /// renders three times. Long: about 40 minutes and 9 GB on 2 cores.
     VoxelGrids,
+    /// Morton against row-major cell tables (seed 003, issue 43): the uniform grid's cells at
+    /// λ = 1/8, 5 and 64 and the brickmap's top grid at 512³…4096³ (tables of about 1 MiB to
+    /// 512 MiB, around and past the caches), each row-major, in Morton order by `pdep` (where the
+    /// CPU has BMI2) and by byte tables, on bunny, dragon and city at 1024×1024: Mrays/s, the
+    /// Morton/row-major ratio per size, bytes with the padding, and the identical steps per ray.
+    /// About 8 minutes and 6 GB on 2 cores.
+    Morton,
     /// Seed 003's volumes (issue 32): the MRI scans (where mricron-data is installed),
     /// Marschner–Lobb at 256³, the dragon as fog at 512³ and sparse particle fields at 1024³ and
     /// 2048³, cast front to back through the dense marcher, the brick map and the min/max octree

@@ -84,6 +84,9 @@ pub const SIMD_PARITY_STRUCTURES: &[&str] =
 /// The voxel-grids preset's levels: 1024³ … 8192³.
 const VOXEL_GRID_LEVELS: std::ops::RangeInclusive<u32> = 10..=13;
 
+/// The uniform grid's densities of the `morton` preset: cell tables around and past the caches.
+const MORTON_UG_LAMBDAS: [f32; 3] = [0.125, 5.0, 64.0];
+
 /// The fastest ORG configuration found on the dragon (issue 16), the `fast` variant of the
 /// org-fast preset: a coarse top grid (λ = 1/8 of the paper's) whose occupied cells get sub-grids
 /// twice as dense (leaf λ = 2), triangles listed by the exact separating-axis test. The rest is
@@ -107,6 +110,7 @@ impl Preset {
             Preset::SvdagShadow => "svdag-shadow",
             Preset::EsvoBeam => "esvo-beam",
             Preset::VoxelGrids => "voxel-grids",
+            Preset::Morton => "morton",
             Preset::Volume => "volume",
             Preset::VolumeOoc => "volume-ooc",
             Preset::Paper => "paper",
@@ -228,6 +232,34 @@ impl Preset {
                 .collect(),
             // The distance field to 4096³: at 8192³ its top grid alone is 4 GiB, and the brickmap's
             // row there already says what a dense top grid costs.
+            // Issue 43's Morton against row-major, at table sizes around the caches: the uniform
+            // grid's cells (dragon: about 0.4, 18 and 230 MiB row-major; Morton pads them up to
+            // 2× per axis) and the brickmap's top grid (1, 8, 64 and 512 MiB), each row-major, by
+            // `pdep` (`auto`) and by byte tables.
+            (Preset::Morton, "ug") => MORTON_UG_LAMBDAS
+                .iter()
+                .flat_map(|lambda| {
+                    let at = |extra: &[&str], variant: &str| {
+                        let mut params = vec![format!("ug.lambda={lambda}")];
+                        params.extend(extra.iter().map(|p| p.to_string()));
+                        (params, Some(format!("lambda{lambda}{variant}")))
+                    };
+                    [
+                        at(&[], ""),
+                        at(&["ug.order=morton"], "-morton"),
+                        at(&["ug.order=morton", "morton.encoder=table"], "-morton-table"),
+                    ]
+                })
+                .collect(),
+            (Preset::Morton, "brickmap") => (9..=12)
+                .flat_map(|l| {
+                    [
+                        at(l, &[], None),
+                        at(l, &["brickmap.order=morton"], Some("morton")),
+                        at(l, &["brickmap.order=morton", "morton.encoder=table"], Some("morton-table")),
+                    ]
+                })
+                .collect(),
             (Preset::VoxelGrids, "distfield") => (10..=12).map(|l| at(l, &[], None)).collect(),
             (Preset::VoxelGrids, "svo" | "svdag") => VOXEL_GRID_LEVELS.map(|l| at(l, &[], None)).collect(),
             (Preset::SvdagTables, "svdag") => (7..=11)
@@ -252,6 +284,7 @@ impl Preset {
             }
             Preset::EsvoBeam => vec!["bvh", "esvo"],
             Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "distfield", "svo", "esvo", "svdag"],
+            Preset::Morton => vec!["ug", "brickmap"],
             Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
             Preset::VolumeOoc => kernels::volume::ooc::page_table::SCHEMES.to_vec(),
             // Its parts name their own.
@@ -291,6 +324,7 @@ impl Preset {
             | Preset::EsvoScale
             | Preset::EsvoBeam
             | Preset::VoxelGrids
+            | Preset::Morton
             | Preset::Volume
             | Preset::VolumeOoc
             | Preset::Paper => &[],
@@ -330,6 +364,7 @@ impl Preset {
             Preset::SvdagShadow => vec!["room", "city", "terrain"],
             Preset::EsvoBeam => vec!["bunny", "dragon", "city", "terrain", "room"],
             Preset::VoxelGrids => vec!["bunny", "dragon", "city", "menger", "mandelbulb", "room"],
+            Preset::Morton => vec!["bunny", "dragon", "city"],
             Preset::Volume => VOLUME_SOURCES.to_vec(),
             Preset::VolumeOoc => VOLUME_OOC_SOURCES.to_vec(),
             Preset::Paper => Vec::new(),
@@ -359,6 +394,7 @@ impl Preset {
             | Preset::EsvoScale
             | Preset::EsvoBeam
             | Preset::VoxelGrids
+            | Preset::Morton
             | Preset::Volume => (1024, 1024),
             Preset::Paper => (512, 512),
             Preset::SvdagTemporal => (1024, 768),
@@ -408,7 +444,7 @@ impl Preset {
 
     /// Repetitions (warm-up, timed) of a render where they differ from the default 1 + 5.
     fn render_reps(self) -> Option<(u32, u32)> {
-        matches!(self, Preset::VoxelGrids | Preset::Volume).then_some((1, 3))
+        matches!(self, Preset::VoxelGrids | Preset::Morton | Preset::Volume).then_some((1, 3))
     }
 
     /// Repetitions (warm-up, timed) of a whole animation's render where they differ from the
@@ -423,7 +459,7 @@ impl Preset {
         match self {
             // 16 s a build of the kitchen's 24 frames in `all` mode.
             Preset::SvdagTemporal if scaled => Some((0, 3)),
-            Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids => Some((0, 1)),
+            Preset::EsvoScale | Preset::EsvoBeam | Preset::VoxelGrids | Preset::Morton => Some((0, 1)),
             Preset::Volume => Some((0, 3)),
             // 16384² light maps: about a minute per build with six faces.
             Preset::SvdagShadow => Some((0, 3)),

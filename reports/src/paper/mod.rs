@@ -11,9 +11,11 @@
 //! (seed 000 §5.6 and §6.2, ESVO at scale), [`voxel_grids`] (grid or octree on the same voxels),
 //! [`volumes`] (seed 003's volumes: empty space skipped per structure), [`ooc`] (issue 42: volumes
 //! larger than memory through a brick cache and page tables), [`simd_parity`] (issue 30:
-//! every family beside Embree, SIMD and scalar);
+//! every family beside Embree, SIMD and scalar), [`cell_order`] (issue 43: Morton against
+//! row-major cell tables);
 //! `grid_builds` is what the grid reproductions share.
 
+pub mod cell_order;
 pub mod esvo;
 mod grid_builds;
 pub mod ooc;
@@ -66,6 +68,8 @@ pub fn section(results: &Results) -> Sheet {
     out.append(esvo_budget(results));
     // Grid or octree on the same voxels wherever a run has a hierarchical voxel grid.
     out.append(voxel_grids::section(results));
+    // Morton against row-major wherever a run has a structure's cells in both orders.
+    out.append(cell_order::section(results));
     // Seed 003's volumes wherever a run has volume cases.
     out.append(volumes::section(results));
     // Seed 003's volumes larger than memory wherever a run has out-of-core cases.
