@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use kernels::volume::order::{VoxelOrder, VoxelStore};
 use kernels::volume::{self, Histogram, TransferFunction, VolumeImage, VolumeStructure};
 use reports::{Timing, VolumeCase};
 use scenes::{Camera, CameraSpec, Volume};
@@ -34,6 +35,12 @@ pub const PARAMS: &[(&str, &str)] = &[
     ("volume.tf", "one transfer function instead: control points value:r,g,b,a separated by ';'"),
     ("volume.step", "the lattice step along a ray, in voxels (default 0.5)"),
     ("volume.peak", "the opacity a fitted ramp reaches at the largest value (default 0.5)"),
+    (
+        "volume.order",
+        "the samples' memory order the samplers read: linear (default, x fastest), morton, tile4 or tile8 (4³ or 8³ \
+         tiles of row-major voxels); every image the same",
+    ),
+    ("morton.encoder", "with volume.order=morton: auto (pdep where the CPU has BMI2, the default) or table"),
 ];
 
 /// Timed render rounds stop once this much timed work was spent on one transfer function (at
@@ -90,6 +97,8 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
         bail!("--param {bad}: not a parameter of the volume workload (it reads {})", known.join(", "));
     }
     let sweep = Sweep::from_params(&params)?;
+    let order = VoxelOrder::parse(&params.get("volume.order", String::from("linear"))?).map_err(anyhow::Error::msg)?;
+    let encoder = structures::voxel::morton::Morton::from_params(&params)?;
     let step_voxels: f32 = params.get("volume.step", 0.5)?;
     if !(step_voxels.is_finite() && step_voxels > 0.0 && step_voxels <= 16.0) {
         bail!("--param volume.step={step_voxels}: a step above 0 and at most 16 voxels");
@@ -124,7 +133,17 @@ pub fn run(args: &RunArgs, command: String) -> Result<()> {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut failed = Vec::new();
     for source in &plan.scenes {
-        let run = SourceRun { plan: &plan, args, structures: &structures, sweep: &sweep, step_voxels, bar: &bar, gpu };
+        let run = SourceRun {
+            plan: &plan,
+            args,
+            structures: &structures,
+            sweep: &sweep,
+            step_voxels,
+            order,
+            encoder,
+            bar: &bar,
+            gpu,
+        };
         let outcome = pool.install(|| run.measure(source, &budget, &mut out));
         if let Err(e) = outcome {
             let reason = format!("{e:#}");
@@ -239,6 +258,9 @@ struct SourceRun<'a> {
     sweep: &'a Sweep,
     /// The lattice step along a ray, in voxels (`volume.step`).
     step_voxels: f32,
+    /// The samples' memory order (`volume.order`) and its Morton encoder (`morton.encoder`).
+    order: VoxelOrder,
+    encoder: structures::voxel::morton::Morton,
     bar: &'a ProgressBar,
     gpu: Option<&'static kernels::gpu::GpuContext>,
 }
@@ -267,6 +289,27 @@ impl SourceRun<'_> {
             image_bytes,
             "a smaller --width and --height",
         )?;
+        if self.order != VoxelOrder::Linear {
+            let padded = match self.order {
+                VoxelOrder::Morton => volume.dims.iter().map(|d| u64::from(d.next_power_of_two())).product::<u64>(),
+                VoxelOrder::Tiles { shift } => {
+                    volume.dims.iter().map(|d| u64::from(d.div_ceil(1 << shift) << shift)).product()
+                }
+                VoxelOrder::Linear => 0,
+            };
+            budget.check(
+                format!("{name}'s samples in {} order", self.order.name()),
+                padded * volume.samples.bytes() / volume.voxel_count().max(1),
+                "volume.order=linear",
+            )?;
+        }
+        let store = VoxelStore::new(&volume, self.order, self.encoder).map_err(anyhow::Error::msg)?;
+        let voxel_order = (self.order != VoxelOrder::Linear).then(|| {
+            let bytes = store.padded_len() as u64 * volume.samples.bytes() / volume.voxel_count().max(1);
+            let encoder = store.encoder().map(|e| format!(" ({})", e.name())).unwrap_or_default();
+            format!("{}{encoder}, {:.1} MiB", self.order.name(), bytes as f64 / f64::from(1 << 20))
+        });
+        let sampler = volume::Sampler::over(&volume, store);
         let histogram = Histogram::of(&volume);
         let transfers = self.sweep.transfers(&volume, &histogram);
         bar.inc(((self.sweep.len() - transfers.len()) * self.structures.len() * backends) as u64);
@@ -299,7 +342,7 @@ impl SourceRun<'_> {
                 }
                 None => built.iter().find_map(|b| b.structure.occupancy()).context("a structure with bricks")?,
             };
-            let cast = Cast { volume: &volume, tf: &transfer.tf, camera: &camera, step };
+            let cast = Cast { sampler: &sampler, tf: &transfer.tf, camera: &camera, step };
             let rounds = self.rounds(&built, cast);
             let image = match self.args.no_images {
                 true => None,
@@ -346,6 +389,7 @@ impl SourceRun<'_> {
                     max_difference: None,
                     image: image.clone(),
                     machine: None,
+                    voxel_order: voxel_order.clone(),
                 });
                 bar.inc(1);
             }
@@ -398,7 +442,7 @@ impl SourceRun<'_> {
         oracle: &VolumeImage,
         cpu_cases: &[VolumeCase],
     ) -> Result<GpuRows> {
-        let Cast { volume, tf, camera, step } = cast;
+        let Cast { sampler, tf, camera, step } = cast;
         use kernels::gpu::volume::{GpuVolume, render_volume};
         let plan = self.plan;
         let opts = kernels::gpu::DispatchOptions { warmup: plan.warmup, reps: plan.reps.max(1), ..Default::default() };
@@ -413,7 +457,8 @@ impl SourceRun<'_> {
                     continue;
                 }
             };
-            let gpu = phases::time(Phase::TimedRenders, || render_volume(ctx, volume, &walk, tf, camera, step, &opts))?;
+            let gpu =
+                phases::time(Phase::TimedRenders, || render_volume(ctx, sampler, &walk, tf, camera, step, &opts))?;
             let differences: Vec<f32> = gpu
                 .image
                 .rgba
@@ -442,7 +487,7 @@ impl SourceRun<'_> {
     /// Warm-up rounds, then timed rounds until `reps` or [`ROUND_BUDGET_MS`]: every structure
     /// rendered once a round, the dense marcher first. The images are the first round's.
     fn rounds(&self, built: &[Built], cast: Cast) -> Rounds {
-        let (plan, Cast { volume, tf, camera, step }) = (self.plan, cast);
+        let (plan, Cast { sampler, tf, camera, step }) = (self.plan, cast);
         let mut images: Vec<VolumeImage> = Vec::new();
         let mut times = vec![Vec::new(); built.len()];
         let (mut spent, mut warm_ups) = (0.0, plan.warmup);
@@ -450,7 +495,7 @@ impl SourceRun<'_> {
             let mut timed = warm_ups == 0;
             for (i, b) in built.iter().enumerate() {
                 let t = Instant::now();
-                let image = volume::render(b.structure.as_ref(), volume, tf, camera, step);
+                let image = volume::render_with(b.structure.as_ref(), sampler, tf, camera, step);
                 let ms = ms_since(t);
                 // A warm-up this long has nothing left to warm: its round is timed.
                 if i == 0 && !timed && ms >= LONG_RENDER_MS {
@@ -474,7 +519,7 @@ impl SourceRun<'_> {
 /// What one transfer function's renders cast: the source, the function, the rays and the step.
 #[derive(Clone, Copy)]
 struct Cast<'a> {
-    volume: &'a Volume,
+    sampler: &'a volume::Sampler<'a>,
     tf: &'a TransferFunction,
     camera: &'a Camera,
     step: f32,

@@ -121,6 +121,10 @@ pub struct VolumeCase {
     /// The machine tag in a merged result file (see [`Case::machine`]).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub machine: Option<String>,
+    /// The samples' memory order the samplers read (`volume.order`, issue 43), with its padded
+    /// bytes and, in Morton order, the encoder: e.g. `morton (bmi2), 16.0 MiB`; `None` row-major.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub voxel_order: Option<String>,
 }
 
 impl VolumeCase {

@@ -388,7 +388,10 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                     ("distfield", GpuVolume::DistanceField(&field), render(&field, volume, &tf, &camera, step)),
                 ] {
                     let what = format!("{} {tf_name} {cam_name} {name}", volume.name);
-                    let gpu = render_volume(ctx, volume, &walk, &tf, &camera, step, &opts).expect(&what).image;
+                    let gpu =
+                        render_volume(ctx, &kernels::volume::Sampler::new(volume), &walk, &tf, &camera, step, &opts)
+                            .expect(&what)
+                            .image;
                     let worst = cpu
                         .rgba
                         .iter()
@@ -405,6 +408,115 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                     if exact {
                         assert_eq!(bits(&gpu), bits(&cpu), "{what}: lavapipe rounds as the CPU does");
                     }
+                }
+            }
+        }
+    }
+}
+
+/// The samples' memory orders (`volume.order`, issue 43): Morton (by `pdep` where the CPU has it,
+/// and by byte tables), 4³ and 8³ tiles. Every voxel reads back its row-major value, every stored
+/// sample outside the volume is padding (zero), and every structure's image, samples and visits
+/// equal the row-major ones bit for bit, on volumes of odd sizes in all three sample types.
+#[test]
+fn every_voxel_order_reads_the_same_samples_and_gives_the_same_images() {
+    use kernels::volume::order::{VoxelOrder, VoxelStore};
+    use kernels::volume::{Sampler, render_with};
+    use structures::voxel::morton::Morton;
+    let field = blobs_in([37, 20, 29], [1.0, 1.25, 0.75]);
+    let wide = Volume {
+        samples: Samples::U16((0..field.samples.len()).map(|i| (field.samples.get(i) * 60000.0) as u16).collect()),
+        ..field.clone()
+    };
+    let sources = [
+        field,
+        wide,
+        specks([45, 33, 70], [1.0; 3]),
+        scenes::load_volume("marschner-lobb@33", 1 << 30).expect("builds"),
+    ];
+    let orders = [
+        (VoxelOrder::Morton, Morton::detect()),
+        (VoxelOrder::Morton, Morton::table()),
+        (VoxelOrder::Tiles { shift: 2 }, Morton::detect()),
+        (VoxelOrder::Tiles { shift: 3 }, Morton::detect()),
+    ];
+    for volume in &sources {
+        let step = volume.spacing[0] * 0.5;
+        for (order, encoder) in orders {
+            let store = VoxelStore::new(volume, order, encoder).expect("fits");
+            let what = format!("{} {} {}", volume.name, order.name(), encoder.name());
+            let d = volume.dims;
+            let mut taken = vec![false; store.padded_len()];
+            for z in 0..d[2] {
+                for y in 0..d[1] {
+                    for x in 0..d[0] {
+                        let i = store.index(x, y, z);
+                        assert!(!std::mem::replace(&mut taken[i], true), "{what}: ({x}, {y}, {z}) shares index {i}");
+                        assert_eq!(
+                            store.value(x, y, z).to_bits(),
+                            volume.value(x, y, z).to_bits(),
+                            "{what} ({x}, {y}, {z})"
+                        );
+                    }
+                }
+            }
+            let padding = taken.iter().enumerate().filter(|(_, t)| !**t).map(|(i, _)| i);
+            assert!(padding.clone().all(|i| store.samples().get(i) == 0.0), "{what}: padding is zero");
+            assert!(store.padded_len() as u64 >= volume.voxel_count());
+            let sampler = Sampler::over(volume, store);
+            for (tf_name, tf) in transfer_functions(volume).into_iter().step_by(3) {
+                for e in VOLUME_STRUCTURES {
+                    let built = (e.build)(volume, &tf);
+                    for (cam_name, camera) in cameras(volume) {
+                        let linear = render(built.as_ref(), volume, &tf, &camera, step);
+                        let ordered = render_with(built.as_ref(), &sampler, &tf, &camera, step);
+                        let case = format!("{what} {tf_name} {cam_name} {}", e.name);
+                        assert_eq!(bits(&ordered), bits(&linear), "{case}: image");
+                        assert_eq!((ordered.samples, ordered.visits), (linear.samples, linear.visits), "{case}");
+                    }
+                }
+            }
+        }
+    }
+    assert!(VoxelStore::new(&blobs(3), VoxelOrder::parse("tile8").expect("a name"), Morton::table()).is_ok());
+    assert!(VoxelOrder::parse("hilbert").is_err());
+}
+
+/// The GPU kernel's addressing in every memory order (volume.wgsl's `voxel_index`): the dense
+/// marcher and the brick walk give the CPU's image in each.
+#[test]
+fn the_gpu_kernel_reads_every_voxel_order() {
+    use kernels::gpu::volume::{GpuVolume, render_volume};
+    use kernels::volume::Sampler;
+    use kernels::volume::order::{VoxelOrder, VoxelStore};
+    use structures::voxel::morton::Morton;
+    let Some(ctx) = kernels::gpu::context_for_tests("volumes::the_gpu_kernel_reads_every_voxel_order") else {
+        return;
+    };
+    let exact = ctx.adapter_info().name.contains("llvmpipe");
+    let opts = kernels::gpu::DispatchOptions { warmup: 0, reps: 1, ..Default::default() };
+    for volume in [blobs_in([37, 20, 29], [1.0, 1.25, 0.75]), specks([45, 33, 70], [1.0; 3])] {
+        let step = volume.spacing[0] * 0.5;
+        let tf = transfer_functions(&volume).remove(6).1;
+        let bricks = Bricks::build(&volume, &tf);
+        let camera = cameras(&volume).remove(0).1;
+        let cpu = render(&bricks, &volume, &tf, &camera, step);
+        for order in
+            [VoxelOrder::Linear, VoxelOrder::Morton, VoxelOrder::Tiles { shift: 2 }, VoxelOrder::Tiles { shift: 3 }]
+        {
+            let sampler = Sampler::over(&volume, VoxelStore::new(&volume, order, Morton::detect()).expect("fits"));
+            for (name, walk) in [("dense", GpuVolume::Dense), ("bricks", GpuVolume::Bricks(&bricks))] {
+                let what = format!("{} {} {name}", volume.name, order.name());
+                let gpu = render_volume(ctx, &sampler, &walk, &tf, &camera, step, &opts).expect(&what).image;
+                let worst = cpu
+                    .rgba
+                    .iter()
+                    .zip(&gpu.rgba)
+                    .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
+                    .fold(0.0f32, f32::max);
+                assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
+                if exact {
+                    assert_eq!(bits(&gpu), bits(&cpu), "{what}: lavapipe rounds as the CPU does");
                 }
             }
         }

@@ -6,7 +6,7 @@
 
 use std::borrow::Cow;
 
-use scenes::{Camera, Samples, Volume};
+use scenes::{Camera, Samples};
 
 use super::program::{GpuBuffer, GpuProgram};
 use super::rays::{FrameUniform, primary_rays};
@@ -16,7 +16,7 @@ use crate::volume::bricks::Bricks;
 use crate::volume::distfield::DistanceField;
 use crate::volume::ntree::NTree;
 use crate::volume::octree::MinMaxOctree;
-use crate::volume::{TransferFunction, VolumeImage, VolumeStructure};
+use crate::volume::{Sampler, TransferFunction, VolumeImage, VolumeStructure};
 
 pub const WGSL: &str = concat!(include_str!("slab.wgsl"), include_str!("volume.wgsl"));
 
@@ -75,16 +75,17 @@ const M_BRICKS: usize = 12;
 const M_CELLS: usize = 15;
 const M_POINTS: usize = 18;
 const M_DOMAIN: usize = 19;
+const M_ORDER: usize = 22;
 /// The header's words before the transfer function's points (`M_TF`).
 const HEADER_WORDS: usize = 32;
 /// Words per level of the `tree` buffer: resolution, empty and full bit offsets, shift.
 const TREE_LEVEL_WORDS: u32 = 6;
 
-/// Casts `camera`'s rays through `volume` with `walk` on the GPU, sampling every `step` under
-/// `tf`.
+/// Casts `camera`'s rays through `sampler`'s volume with `walk` on the GPU, sampling every `step`
+/// under `tf`, the samples uploaded in the sampler's memory order.
 pub fn render_volume(
     ctx: &GpuContext,
-    volume: &Volume,
+    sampler: &Sampler,
     walk: &GpuVolume,
     tf: &TransferFunction,
     camera: &Camera,
@@ -92,6 +93,8 @@ pub fn render_volume(
     opts: &DispatchOptions,
 ) -> Result<GpuVolumeRender, GpuError> {
     let label = "volume";
+    let volume = sampler.volume();
+    let store = sampler.store();
     if volume.voxel_count() > u64::from(u32::MAX) {
         return Err(GpuError::Limit {
             label: label.into(),
@@ -113,6 +116,7 @@ pub fn render_volume(
     header[M_STEP] = f(step);
     header[M_POINTS] = tf.points().len() as u32;
     header[M_DOMAIN..M_DOMAIN + 3].copy_from_slice(&volume.bounds().max.to_array().map(f));
+    header[M_ORDER..M_ORDER + 4].copy_from_slice(&store.gpu_words());
     let (mode, bricks) = match walk {
         GpuVolume::Dense => (0, None),
         GpuVolume::Bricks(bricks) => (1, Some(*bricks)),
@@ -155,7 +159,7 @@ pub fn render_volume(
         header.push(f(value));
         header.extend(rgba.map(f));
     }
-    let samples: Cow<[u32]> = match &volume.samples {
+    let samples: Cow<[u32]> = match store.samples() {
         Samples::U8(v) => {
             Cow::Owned(v.chunks(4).map(|c| c.iter().rev().fold(0u32, |w, &b| w << 8 | u32::from(b))).collect())
         }

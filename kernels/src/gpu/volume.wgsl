@@ -11,7 +11,7 @@
 // transparent spans takes them.
 //
 // Buffers (kernels/src/gpu/volume.rs): `vol` the samples packed into words (u8: four a word, u16:
-// two, f32: one, x fastest); `header` the header below, then the transfer function's points, five
+// two, f32: one), in the memory order of kernels::volume::order (x fastest; Morton; or tiles); `header` the header below, then the transfer function's points, five
 // words each (value, r, g, b, a); `empty` one bit per brick (modes 1 and 2); `tree` (mode 2) the
 // levels above the bricks, finest first: word 0 their count, then per level TREE_LEVEL_WORDS
 // words (its resolution, the word offsets in `tree` of its empty bits and of its full bits: no
@@ -36,6 +36,8 @@ const M_BRICKS: u32 = 12u;     // 3 words: bricks per axis
 const M_CELLS: u32 = 15u;      // 3 words: voxel cells per axis
 const M_POINTS: u32 = 18u;     // transfer-function points
 const M_DOMAIN: u32 = 19u;     // 3 f32: the far corner of the voxel centres' box
+const M_ORDER: u32 = 22u;      // VoxelStore::gpu_words: 0 row-major; 1 Morton, the axes' masks;
+                               // 2 tiles, their shift and count along x and y
 const M_TF: u32 = 32u;         // first point
 
 // Words per level of `tree`.
@@ -53,10 +55,44 @@ fn dims() -> vec3<u32> {
     return vec3<u32>(header(M_DIMS), header(M_DIMS + 1u), header(M_DIMS + 2u));
 }
 
-// Voxel (x, y, z) as f32: scenes::Volume::value.
+// `v`'s low bits placed, in order, on the set bits of `mask` (pdep).
+fn deposit(v: u32, mask: u32) -> u32 {
+    var out = 0u;
+    var m = mask;
+    var k = 0u;
+    while (m != 0u) {
+        let low = m & (~m + 1u);
+        if (((v >> k) & 1u) != 0u) {
+            out |= low;
+        }
+        m &= m - 1u;
+        k += 1u;
+    }
+    return out;
+}
+
+// Where voxel (x, y, z) is stored: kernels::volume::order::VoxelStore::index.
+fn voxel_index(x: u32, y: u32, z: u32) -> u32 {
+    switch header(M_ORDER) {
+        case 1u: {
+            return deposit(x, header(M_ORDER + 1u)) | deposit(y, header(M_ORDER + 2u)) | deposit(z, header(M_ORDER + 3u));
+        }
+        case 2u: {
+            let s = header(M_ORDER + 1u);
+            let m = (1u << s) - 1u;
+            let tile = (x >> s) + header(M_ORDER + 2u) * ((y >> s) + header(M_ORDER + 3u) * (z >> s));
+            return (tile << (3u * s)) | (x & m) | ((y & m) << s) | ((z & m) << (2u * s));
+        }
+        default: {
+            let d = dims();
+            return x + d.x * (y + d.y * z);
+        }
+    }
+}
+
+// Voxel (x, y, z) as f32: kernels::volume::order::VoxelStore::value.
 fn voxel(x: u32, y: u32, z: u32) -> f32 {
-    let d = dims();
-    let i = x + d.x * (y + d.y * z);
+    let i = voxel_index(x, y, z);
     switch header(M_KIND) {
         case 0u: {
             return f32((vol(i / 4u) >> (8u * (i % 4u))) & 0xffu);

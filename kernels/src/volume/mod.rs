@@ -33,6 +33,7 @@ pub mod distfield;
 pub mod ntree;
 pub mod octree;
 pub mod ooc;
+pub mod order;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -151,16 +152,38 @@ impl TransferFunction {
     }
 }
 
-/// Reads a volume's samples by position: the one arithmetic every structure samples with.
+/// Reads a volume's samples by position: the one arithmetic every structure samples with, over
+/// the samples in one memory order ([`order::VoxelStore`]).
 pub struct Sampler<'a> {
     volume: &'a Volume,
+    store: order::VoxelStore<'a>,
     inv_spacing: [f32; 3],
     last: [u32; 3],
 }
 
 impl<'a> Sampler<'a> {
+    /// The volume's samples as stored, row-major.
     pub fn new(volume: &'a Volume) -> Self {
-        Self { volume, inv_spacing: volume.spacing.map(|s| 1.0 / s), last: volume.dims.map(|d| d.saturating_sub(1)) }
+        Self::over(volume, order::VoxelStore::linear(volume))
+    }
+
+    /// The volume's samples as `store` holds them.
+    pub fn over(volume: &'a Volume, store: order::VoxelStore<'a>) -> Self {
+        Self {
+            volume,
+            store,
+            inv_spacing: volume.spacing.map(|s| 1.0 / s),
+            last: volume.dims.map(|d| d.saturating_sub(1)),
+        }
+    }
+
+    pub fn volume(&self) -> &'a Volume {
+        self.volume
+    }
+
+    /// The samples in their memory order.
+    pub fn store(&self) -> &order::VoxelStore<'a> {
+        &self.store
     }
 
     /// The trilinear interpolation at `p` (a position in the volume's frame), its cell clamped
@@ -172,7 +195,7 @@ impl<'a> Sampler<'a> {
             let x = (i[0] + dx).min(self.last[0]);
             let y = (i[1] + dy).min(self.last[1]);
             let z = (i[2] + dz).min(self.last[2]);
-            self.volume.value(x, y, z)
+            self.store.value(x, y, z)
         })
     }
 
@@ -308,7 +331,17 @@ pub fn render(
     camera: &Camera,
     step: f32,
 ) -> VolumeImage {
-    let sampler = Sampler::new(volume);
+    render_with(structure, &Sampler::new(volume), tf, camera, step)
+}
+
+/// [`render`] reading the samples through `sampler` (in its memory order).
+pub fn render_with(
+    structure: &dyn VolumeMarch,
+    sampler: &Sampler,
+    tf: &TransferFunction,
+    camera: &Camera,
+    step: f32,
+) -> VolumeImage {
     let (lo, hi) = sampler.domain();
     let rows: Vec<(Vec<[f32; 4]>, u64, u64)> = (0..camera.height)
         .into_par_iter()
@@ -317,7 +350,7 @@ pub fn render(
             let row = (0..camera.width)
                 .map(|x| {
                     let ray = camera.ray(x, y);
-                    let mut c = Compositor::new(&sampler, tf, &ray, step);
+                    let mut c = Compositor::new(sampler, tf, &ray, step);
                     let inv = crate::cpu::slab::reciprocal(ray.dir);
                     let span = crate::cpu::slab::interval(
                         &ray.origin.to_array(),
