@@ -191,12 +191,7 @@ impl<'a> Sampler<'a> {
     #[inline]
     pub fn value(&self, p: Vec3) -> f32 {
         let (i, f) = cell_at(p, self.inv_spacing, self.last);
-        interpolate(f, |dx, dy, dz| {
-            let x = (i[0] + dx).min(self.last[0]);
-            let y = (i[1] + dy).min(self.last[1]);
-            let z = (i[2] + dz).min(self.last[2]);
-            self.store.value(x, y, z)
-        })
+        self.store.trilinear(i, f, self.last)
     }
 
     /// The domain: the box of the voxel centres.

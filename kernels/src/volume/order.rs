@@ -164,6 +164,34 @@ impl<'a> VoxelStore<'a> {
         self.samples.get(self.index(x, y, z))
     }
 
+    /// The trilinear interpolation by `f` of the cell at `i` (its far corners clamped to `last`),
+    /// in `super::interpolate`'s order of operations. The order and the sample type are matched
+    /// once per sample, not once per corner: matched per corner through [`VoxelStore::value`], the
+    /// row-major dense marcher ran 0.55–0.63× its speed before the store existed (mri-ch2better
+    /// and fog@dragon:512 at 1024², 2 threads).
+    #[inline(always)]
+    pub fn trilinear(&self, i: [u32; 3], f: [f32; 3], last: [u32; 3]) -> f32 {
+        macro_rules! by_type {
+            ($index:expr) => {
+                match &*self.samples {
+                    Samples::U8(v) => corners(v, f32::from, $index, i, f, last),
+                    Samples::U16(v) => corners(v, f32::from, $index, i, f, last),
+                    Samples::F32(v) => corners(v, |x| x, $index, i, f, last),
+                }
+            };
+        }
+        match &self.addressing {
+            Addressing::Linear { dims } => {
+                let (dx, dy) = (dims[0], dims[1]);
+                by_type!(|x: u32, y: u32, z: u32| x as usize + dx * (y as usize + dy * z as usize))
+            }
+            Addressing::Morton { interleave, encoder } => {
+                by_type!(|x: u32, y: u32, z: u32| interleave.encode(*encoder, [x, y, z]) as usize)
+            }
+            Addressing::Tiles { .. } => by_type!(|x: u32, y: u32, z: u32| self.index(x, y, z)),
+        }
+    }
+
     /// The words the GPU kernel's addressing reads (volume.wgsl's `M_ORDER` and the three after
     /// it): 0 row-major; 1 and each axis's Morton mask; 2 and the tile shift and tiles along x
     /// and y.
@@ -177,4 +205,22 @@ impl<'a> VoxelStore<'a> {
             Addressing::Tiles { shift, tiles } => [2, *shift, tiles[0] as u32, tiles[1] as u32],
         }
     }
+}
+
+/// [`VoxelStore::trilinear`] over samples `v` of one type, voxel (x, y, z) at `index(x, y, z)`.
+#[inline(always)]
+fn corners<T: Copy>(
+    v: &[T],
+    to_f32: impl Fn(T) -> f32,
+    index: impl Fn(u32, u32, u32) -> usize,
+    i: [u32; 3],
+    f: [f32; 3],
+    last: [u32; 3],
+) -> f32 {
+    super::interpolate(f, |dx, dy, dz| {
+        let x = (i[0] + dx).min(last[0]);
+        let y = (i[1] + dy).min(last[1]);
+        let z = (i[2] + dz).min(last[2]);
+        to_f32(v[index(x, y, z)])
+    })
 }

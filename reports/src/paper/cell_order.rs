@@ -4,14 +4,12 @@
 //! the bytes the Morton order pads the table with, and the steps per ray (the same cells are
 //! visited either way, so they must match). Beside it the published figures: bricked against
 //! row-major volumes 2.0–2.8× on a CPU ray caster (Grimm, Bruckner et al. 2004) and Morton indexing
-//! in a CPU DDA "not by much" (the per-step encode cost). Every ratio comes from the speeds over
-//! `bvh` timed beside each case where the run has them (`references::vs_bvh`), so machine load
-//! cancels.
+//! in a CPU DDA "not by much" (the per-step encode cost). Every ratio is of the two cases' Mrays/s,
+//! rendered back to back in one run.
 
 use std::fmt::Write;
 
 use crate::claims::{Check, Sheet};
-use crate::references::vs_bvh;
 use crate::schema::{Case, Results};
 
 /// The memory components that are a structure's dense cell table: the uniform grid's offsets and
@@ -21,14 +19,20 @@ const TABLES: [&str; 2] = ["cells", "top_grid"];
 /// The padding a Morton order adds to a table (`structures::grid`'s memory component).
 const PADDING: &str = "Morton padding";
 
+/// Parameter `key` of a case: at the top of its parameters (the grids) or under its structure's
+/// name (the voxel structures, beside the voxelisation's).
+fn param<'a>(c: &'a Case, key: &str) -> Option<&'a serde_json::Value> {
+    c.params.get(key).or_else(|| c.params.get(&c.structure)?.get(key))
+}
+
 /// The cell order a case was built with (`linear` or `morton`); `None` for a structure without one.
 fn order(c: &Case) -> Option<&str> {
-    c.params.get("order")?.as_str()
+    param(c, "order")?.as_str()
 }
 
 /// The encoder of a Morton-ordered case: `bmi2` (`pdep`) or `table`.
 fn encoder(c: &Case) -> Option<&str> {
-    c.params.get("morton_encoder")?.as_str()
+    param(c, "morton_encoder")?.as_str()
 }
 
 /// The variant of the row-major twin of a Morton case's variant: the `morton` or `morton-table`
@@ -52,14 +56,13 @@ fn twin<'a>(cases: &[&'a Case], c: &Case) -> Option<&'a Case> {
     })
 }
 
-/// `a`'s CPU primary-ray speed over `b`'s: through each one's `bvh` timed beside it where both
-/// have it, else their Mrays/s.
-fn ratio(cases: &[&Case], a: &Case, b: &Case) -> Option<f64> {
+/// `a`'s CPU primary-ray speed over `b`'s, their Mrays/s. The two orders of a structure run back
+/// to back in one run, on the same rays and threads; dividing each by its own `bvh` reference
+/// (as the other sections do across structures) added that reference's noise instead, up to
+/// ±9 % between the two encoders of one case on the `morton` preset.
+fn ratio(a: &Case, b: &Case) -> Option<f64> {
     let (ra, rb) = (a.cpu_primary()?, b.cpu_primary()?);
-    match (vs_bvh(cases, a, ra), vs_bvh(cases, b, rb)) {
-        (Some(x), Some(y)) if y > 0.0 => Some(x / y),
-        _ => (rb.mrays_per_s > 0.0).then(|| ra.mrays_per_s / rb.mrays_per_s),
-    }
+    (rb.mrays_per_s > 0.0).then(|| ra.mrays_per_s / rb.mrays_per_s)
 }
 
 /// Bytes of the case's dense cell table, its padding included.
@@ -139,7 +142,7 @@ pub fn section(results: &Results) -> Sheet {
                 let c = c.filter(|c| c.cpu_primary().is_some());
                 match c {
                     Some(c) => {
-                        let x = ratio(&cases, c, row.linear);
+                        let x = ratio(c, row.linear);
                         (format!("{:.2}", c.cpu_primary().map_or(0.0, |m| m.mrays_per_s)), x)
                     }
                     None => ("—".into(), None),

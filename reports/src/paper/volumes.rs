@@ -90,9 +90,12 @@ pub fn section(results: &Results) -> Sheet {
     for source in sources(cases) {
         let of: Vec<&VolumeCase> = cases.iter().filter(|c| c.source == source).collect();
         let s = of[0];
+        // The samples' memory order (`volume.order`), where it is not row-major.
+        let order =
+            s.voxel_order.as_ref().map_or(String::new(), |o| format!(" Samples in memory (`volume.order`): {o}."));
         let _ = writeln!(
             out,
-            "### {source}\n\n{}×{}×{} {} ({}), loaded in {:.0} ms; step {} along a ray.\n",
+            "### {source}\n\n{}×{}×{} {} ({}), loaded in {:.0} ms; step {} along a ray.{order}\n",
             s.dims[0], s.dims[1], s.dims[2], s.sample_type, s.provenance, s.source_load_ms, s.step
         );
         out.push_str(
