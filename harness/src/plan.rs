@@ -163,6 +163,11 @@ impl Preset {
             (Preset::Default | Preset::Ci, "kdtree") => {
                 vec![(Vec::new(), None), (vec!["kdtree.traversal=ropes".into()], Some("ropes".into()))]
             }
+            // The uniform grid's cells in Morton order beside row-major (issue 43): the gate holds
+            // its padded bytes and its steps, which must equal row-major's.
+            (Preset::Default | Preset::Ci, "ug") => {
+                vec![(Vec::new(), None), (vec!["ug.order=morton".into()], Some("morton".into()))]
+            }
             (Preset::SimdParity, "kdtree" | "octree") => {
                 vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))]
             }
