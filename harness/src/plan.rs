@@ -164,8 +164,9 @@ impl Preset {
                 vec![(Vec::new(), None), (vec!["kdtree.traversal=ropes".into()], Some("ropes".into()))]
             }
             // The uniform grid's cells in Morton order beside row-major (issue 43): the gate holds
-            // its padded bytes and its steps, which must equal row-major's.
-            (Preset::Default | Preset::Ci, "ug") => {
+            // its padded bytes and its steps, which must equal row-major's. (The default matrix
+            // leaves it to the `morton` preset: one grid's layout, not a structure of its own.)
+            (Preset::Ci, "ug") => {
                 vec![(Vec::new(), None), (vec!["ug.order=morton".into()], Some("morton".into()))]
             }
             (Preset::SimdParity, "kdtree" | "octree") => {

@@ -88,6 +88,11 @@ fn cameras(v: &Volume) -> Vec<(&'static str, Camera)> {
     vec![("outside", outside), ("inside", Camera::new(inside, SIZE, SIZE))]
 }
 
+/// The largest difference of one channel between two images of the same size.
+fn worst_channel(a: &VolumeImage, b: &VolumeImage) -> f32 {
+    a.rgba.iter().zip(&b.rgba).flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs())).fold(0.0, f32::max)
+}
+
 fn bits(image: &VolumeImage) -> Vec<[u32; 4]> {
     image.rgba.iter().map(|p| p.map(f32::to_bits)).collect()
 }
@@ -392,12 +397,7 @@ fn the_gpu_kernel_gives_the_cpu_image() {
                         render_volume(ctx, &kernels::volume::Sampler::new(volume), &walk, &tf, &camera, step, &opts)
                             .expect(&what)
                             .image;
-                    let worst = cpu
-                        .rgba
-                        .iter()
-                        .zip(&gpu.rgba)
-                        .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
-                        .fold(0.0f32, f32::max);
+                    let worst = worst_channel(&cpu, &gpu);
                     assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
                     if name == "octree" || name == "vdb" || name == "tree64" {
                         // The trees' GPU walk cuts its own spans (a descent per span).
@@ -508,12 +508,7 @@ fn the_gpu_kernel_reads_every_voxel_order() {
             for (name, walk) in [("dense", GpuVolume::Dense), ("bricks", GpuVolume::Bricks(&bricks))] {
                 let what = format!("{} {} {name}", volume.name, order.name());
                 let gpu = render_volume(ctx, &sampler, &walk, &tf, &camera, step, &opts).expect(&what).image;
-                let worst = cpu
-                    .rgba
-                    .iter()
-                    .zip(&gpu.rgba)
-                    .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
-                    .fold(0.0f32, f32::max);
+                let worst = worst_channel(&cpu, &gpu);
                 assert!(worst <= 1e-5, "{what}: a channel differs by {worst}");
                 if exact {
                     assert_eq!(bits(&gpu), bits(&cpu), "{what}: lavapipe rounds as the CPU does");

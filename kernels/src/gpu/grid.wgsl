@@ -73,22 +73,6 @@ fn cell_masks(h: GridHeader) -> vec3<u32> {
     return masks;
 }
 
-// `v`'s low bits placed, in order, on the set bits of `mask` (pdep).
-fn deposit(v: u32, mask: u32) -> u32 {
-    var out = 0u;
-    var m = mask;
-    var k = 0u;
-    while (m != 0u) {
-        let low = m & (~m + 1u);
-        if (((v >> k) & 1u) != 0u) {
-            out |= low;
-        }
-        m &= m - 1u;
-        k += 1u;
-    }
-    return out;
-}
-
 // The index mask of a DDA's steps on its axes: the Morton masks for a cell DDA of a grid in
 // Morton order, all ones otherwise (Interleave::step with an all-ones mask is the plain add).
 fn step_masks(h: GridHeader, shift: u32) -> vec3<u32> {

@@ -52,6 +52,23 @@ struct Frame {
 override COUNT_STEPS: bool = false;
 var<private> steps: u32;
 
+// `v`'s low bits placed, in order, on the set bits of `mask`: BMI2's pdep, a bit at a time (the
+// Morton orders of the grid's cells and of the volume's samples, structures::voxel::morton).
+fn deposit(v: u32, mask: u32) -> u32 {
+    var out = 0u;
+    var m = mask;
+    var k = 0u;
+    while (m != 0u) {
+        let low = m & (~m + 1u);
+        if (((v >> k) & 1u) != 0u) {
+            out |= low;
+        }
+        m &= m - 1u;
+        k += 1u;
+    }
+    return out;
+}
+
 // Kernels call this once per iteration of their traversal loop (docs/design.md §3 "steps").
 fn count_step() {
     if (COUNT_STEPS) {

@@ -55,22 +55,6 @@ fn dims() -> vec3<u32> {
     return vec3<u32>(header(M_DIMS), header(M_DIMS + 1u), header(M_DIMS + 2u));
 }
 
-// `v`'s low bits placed, in order, on the set bits of `mask` (pdep).
-fn deposit(v: u32, mask: u32) -> u32 {
-    var out = 0u;
-    var m = mask;
-    var k = 0u;
-    while (m != 0u) {
-        let low = m & (~m + 1u);
-        if (((v >> k) & 1u) != 0u) {
-            out |= low;
-        }
-        m &= m - 1u;
-        k += 1u;
-    }
-    return out;
-}
-
 // Where voxel (x, y, z) is stored: kernels::volume::order::VoxelStore::index.
 fn voxel_index(x: u32, y: u32, z: u32) -> u32 {
     switch header(M_ORDER) {
