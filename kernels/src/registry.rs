@@ -216,8 +216,9 @@ pub static STRUCTURES: &[StructureEntry] = &[
         summary: "OpenVDB/NanoVDB tree (seed 003): root table, interior nodes with child masks, bit-mask leaves, \
                   hierarchical DDA; --levels L, vdb.log2=5,4,3 (any split, e.g. 4,3,3 or 3,3,3,3), \
                   vdb.tables=dense (NanoVDB's direct-access tables)|compact (mask + popcount rank), \
-                  vdb.skip=child (NanoVDB's HDDA)|block (also empty blocks of 2-8 children per axis)",
-        params: &["voxel.levels", "vdb.log2", "vdb.tables", "vdb.skip"],
+                  vdb.skip=child (NanoVDB's HDDA)|block (also empty blocks of 2-8 children per axis), \
+                  vdb.order=morton (slots by local Morton code)|linear (row-major, NanoVDB's; child skip only)",
+        params: &["voxel.levels", "vdb.log2", "vdb.tables", "vdb.skip", "vdb.order"],
         check: |p| structures::vdb::VdbParams::from_params(p).map(drop),
         build: |input| Ok(Box::new(structures::vdb::Vdb::build(input)?)),
         available: always,

@@ -248,7 +248,7 @@ fn svdag_temporal_frames() {
 }
 
 /// The hierarchical voxel grids' switches beyond the defaults the per-scene test builds with: the
-/// VDB's compact tables, coalesced skipping and other splits, the 64-tree's DAG, the brickmap's
+/// VDB's compact tables, coalesced skipping, other splits and row-major slots, the 64-tree's DAG, the brickmap's
 /// Morton-ordered top grid, the distance field with its leaps and with short ones (cap 2); and
 /// every one's
 /// words split over several bindings, so the generated accessors' chunking is exercised. The
@@ -258,8 +258,10 @@ fn voxel_grid_variants() {
     let Some(ctx) = context_for_tests("gpu::voxel_grid_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 9] = [
+    let variants: [(&str, &str, &[&str]); 11] = [
         ("vdb-compact", "vdb", &["vdb.tables=compact"]),
+        ("vdb-linear", "vdb", &["vdb.order=linear"]),
+        ("vdb-linear-compact-433", "vdb", &["vdb.order=linear", "vdb.tables=compact", "vdb.log2=4,3,3"]),
         ("vdb-block", "vdb", &["vdb.tables=compact", "vdb.skip=block"]),
         ("vdb-3333", "vdb", &["vdb.log2=3,3,3,3", "vdb.skip=block"]),
         ("vdb-433", "vdb", &["vdb.log2=4,3,3", "vdb.tables=dense"]),

@@ -31,6 +31,7 @@ const TRACED: &[(&str, &[&str])] = &[
     ("distfield", &["voxel.levels=8"]),
     ("vdb", &["voxel.levels=8", "vdb.tables=dense", "vdb.skip=child"]),
     ("vdb", &["voxel.levels=8", "vdb.tables=compact", "vdb.skip=block", "vdb.log2=3,2,2"]),
+    ("vdb", &["voxel.levels=8", "vdb.tables=compact", "vdb.order=linear"]),
 ];
 
 fn check(scene_name: &str) {

@@ -48,14 +48,16 @@ fn input<'a>(scene: &'a Scene, params: &'a Params) -> BuildInput<'a> {
 }
 
 /// The VDB variants: NanoVDB's dense tables and the compact ones on the default 5-4-3 split, with
-/// NanoVDB's HDDA and with empty blocks coalesced, the GigaVoxels-like N³-tree (N = 8), and a
-/// shallower split.
-const VDB_VARIANTS: [&[&str]; 5] = [
+/// NanoVDB's HDDA and with empty blocks coalesced, the GigaVoxels-like N³-tree (N = 8), a
+/// shallower split, and slots numbered row-major (NanoVDB's order) in both table modes.
+const VDB_VARIANTS: [&[&str]; 7] = [
     &["vdb.tables=dense"],
     &["vdb.tables=compact"],
     &["vdb.tables=compact", "vdb.skip=block"],
     &["vdb.log2=3,3,3,3", "vdb.tables=compact"],
     &["vdb.log2=4,3,3", "vdb.tables=dense", "vdb.skip=block"],
+    &["vdb.order=linear", "vdb.tables=dense"],
+    &["vdb.order=linear", "vdb.log2=4,2,3", "vdb.tables=compact"],
 ];
 
 /// Every hierarchical grid of one scene at one level.
@@ -161,6 +163,42 @@ fn exact_at_level_9(name: &str) {
 }
 
 tests::per_builtin_scene!(exact_at_level_9);
+
+/// `vdb.order=linear` (slots row-major, NanoVDB's numbering) against the default local Morton
+/// order, in both table modes, on scene `name` at L = 10: the same words per node kind but not
+/// the same words (the slots moved), and on the shared ray set the same hit (`t` and voxel bit for
+/// bit) and the same counters for every ray.
+fn check_vdb_orders(name: &str) {
+    let level = 10;
+    let scene = load(name);
+    let rays = ray_set(&scene, &scene.triangles(), 3000, 0x43 ^ name.len() as u64);
+    for tables in ["vdb.tables=dense", "vdb.tables=compact"] {
+        let build = |order: &str| {
+            let p = params(level, &[tables, order]);
+            Vdb::build(&input(&scene, &p)).unwrap_or_else(|e| panic!("{name} {tables} {order}: {e}"))
+        };
+        let (morton, linear) = (build("vdb.order=morton"), build("vdb.order=linear"));
+        vdb::validate::validate(&linear).unwrap_or_else(|e| panic!("{name} {tables} linear: {e}"));
+        assert_eq!(vdb::validate::expand(&linear), vdb::validate::expand(&morton), "{name} {tables}: the voxels");
+        assert_eq!((linear.words.len(), linear.leaves.len()), (morton.words.len(), morton.leaves.len()));
+        assert!(
+            morton.voxels < 2 || (&linear.words, &linear.leaves) != (&morton.words, &morton.leaves),
+            "{name} {tables}: the row-major tree has the Morton tree's words"
+        );
+        for r in &rays {
+            let (mut a, mut b) = (Counters::default(), Counters::default());
+            let want = morton.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut a).map(|h| (h.prim, h.t.to_bits()));
+            let got = linear.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut b).map(|h| (h.prim, h.t.to_bits()));
+            assert_eq!(got, want, "{name} {tables}: row-major differs from Morton on a {} ray {:?}", r.kind, r.ray);
+            assert_eq!(b, a, "{name} {tables}: counters differ on a {} ray {:?}", r.kind, r.ray);
+        }
+    }
+}
+
+mod vdb_orders {
+    use super::check_vdb_orders;
+    tests::per_builtin_scene!(check_vdb_orders);
+}
 
 #[test]
 fn exact_against_the_voxel_dda_at_level_7() {
@@ -501,6 +539,10 @@ fn bad_parameters_are_refused_with_their_range() {
     }
     let err = vdb(&["voxel.levels=20"]).expect_err("too fine").to_string();
     assert!(err.contains("voxel.levels"), "{err}");
+    let err = vdb(&["vdb.order=linear", "vdb.skip=block"]).expect_err("blocks need Morton order").to_string();
+    assert!(err.contains("vdb.skip") && err.contains("vdb.order=morton"), "{err}");
+    let err = vdb(&["vdb.order=hilbert"]).expect_err("no such order").to_string();
+    assert!(err.contains("vdb.order") && err.contains("linear"), "{err}");
     let err =
         Tree64::build(&BuildInput { scene: &scene, triangles: scene.triangles(), params: &p(&["tree64.dag=yes"]) })
             .map(drop)

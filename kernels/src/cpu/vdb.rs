@@ -2,13 +2,13 @@
 //! Museth's HDDA: the DDA's cell is reset to the empty region the ray is in, a root tile's top
 //! node, an upper node's child, a lower node's leaf — down to the voxel bits of occupied leaves.
 //! The top cells are found in the root table by binary search; a node's child through its
-//! direct-access table (`dense`) or its mask's rank (`compact`), each mode its own
-//! monomorphised loop. WGSL twin: `kernels/src/gpu/vdb.wgsl`.
+//! direct-access table (`dense`) or its mask's rank (`compact`), with slots numbered by local
+//! Morton code or row-major (`vdb.order`), each mode its own monomorphised loop. WGSL twin: `kernels/src/gpu/vdb.wgsl`.
 
 use scenes::{Camera, Ray};
 use structures::vdb::layout::{LevelOffsets, Sizes, bit, compact_child_index};
 use structures::vdb::{Skip, Tables, Vdb};
-use structures::voxel::morton;
+use structures::voxel::morton::{self, CellOrder};
 
 use super::wide_dda::{WideNodes, WideReads, trace, trace_recorded};
 use crate::gpu::GpuProgram;
@@ -17,7 +17,7 @@ use crate::{Counters, Hit, NoStats, Stats, Traverse};
 
 /// The tree's words as the DDA sees them. A node is a word index (in `leaves` at the voxels'
 /// level); where a level's cells are found is the tree's [`LevelOffsets`].
-struct Nodes<'a, const DENSE: bool, const BLOCKS: bool> {
+struct Nodes<'a, const DENSE: bool, const BLOCKS: bool, const LINEAR: bool> {
     words: &'a [u32],
     leaves: &'a [u32],
     sizes: Sizes,
@@ -25,7 +25,7 @@ struct Nodes<'a, const DENSE: bool, const BLOCKS: bool> {
     at: &'a LevelOffsets,
 }
 
-impl<'a, const DENSE: bool, const BLOCKS: bool> Nodes<'a, DENSE, BLOCKS> {
+impl<'a, const DENSE: bool, const BLOCKS: bool, const LINEAR: bool> Nodes<'a, DENSE, BLOCKS, LINEAR> {
     fn new(v: &'a Vdb) -> Self {
         let (words, leaves, sizes) = (&v.words[..], &v.leaves[..], v.params.sizes());
         Self { words, leaves, sizes, voxels: v.levels.len - 1, at: &v.offsets }
@@ -77,9 +77,10 @@ impl<'a, const DENSE: bool, const BLOCKS: bool> Nodes<'a, DENSE, BLOCKS> {
     }
 }
 
-impl<const DENSE: bool, const BLOCKS: bool> WideNodes for Nodes<'_, DENSE, BLOCKS> {
+impl<const DENSE: bool, const BLOCKS: bool, const LINEAR: bool> WideNodes for Nodes<'_, DENSE, BLOCKS, LINEAR> {
     type Node = u32;
     type Desc = u32;
+    const ROW_MAJOR: bool = LINEAR;
 
     #[inline(always)]
     fn top(&self, cell: [u32; 3]) -> Option<u32> {
@@ -115,7 +116,7 @@ impl<const DENSE: bool, const BLOCKS: bool> WideNodes for Nodes<'_, DENSE, BLOCK
 /// What `vdb.wgsl` reads: the root table's words in the top cell's binary search, a mask word for
 /// a cell's bit, the child's table entry (dense) or its mask and rank words and the list's offset
 /// (compact), and the mask words an empty block's test reads; buffer 1 is `words`, 2 `leaves`.
-impl<const DENSE: bool, const BLOCKS: bool> WideReads for Nodes<'_, DENSE, BLOCKS> {
+impl<const DENSE: bool, const BLOCKS: bool, const LINEAR: bool> WideReads for Nodes<'_, DENSE, BLOCKS, LINEAR> {
     fn top_reads(&self, cell: [u32; 3], to: &mut Trace) {
         self.sizes.find_tile_reading(self.words, morton::encode(cell), |at, n| to.read(1, at as u64 * 4, n as u32 * 4));
     }
@@ -144,25 +145,34 @@ impl<const DENSE: bool, const BLOCKS: bool> WideReads for Nodes<'_, DENSE, BLOCK
     }
 }
 
-/// `$body` with `$nodes` bound to the accessor of `$v`'s table and skip modes, each mode its own
-/// monomorphised loop.
+/// `$body` with `$nodes` bound to the accessor of `$v`'s table, skip and slot-order modes, each
+/// its own monomorphised loop (`vdb.skip=block` needs Morton order, so row-major has no block
+/// variant).
 macro_rules! with_nodes {
     ($v:expr, |$nodes:ident| $body:expr) => {
-        match ($v.params.tables, $v.params.skip) {
-            (Tables::Dense, Skip::Child) => {
-                let $nodes = Nodes::<true, false>::new($v);
+        match ($v.params.tables, $v.params.skip, $v.params.order) {
+            (Tables::Dense, Skip::Child, CellOrder::Morton) => {
+                let $nodes = Nodes::<true, false, false>::new($v);
                 $body
             }
-            (Tables::Dense, Skip::Block) => {
-                let $nodes = Nodes::<true, true>::new($v);
+            (Tables::Dense, Skip::Block, _) => {
+                let $nodes = Nodes::<true, true, false>::new($v);
                 $body
             }
-            (Tables::Compact, Skip::Child) => {
-                let $nodes = Nodes::<false, false>::new($v);
+            (Tables::Compact, Skip::Child, CellOrder::Morton) => {
+                let $nodes = Nodes::<false, false, false>::new($v);
                 $body
             }
-            (Tables::Compact, Skip::Block) => {
-                let $nodes = Nodes::<false, true>::new($v);
+            (Tables::Compact, Skip::Block, _) => {
+                let $nodes = Nodes::<false, true, false>::new($v);
+                $body
+            }
+            (Tables::Dense, Skip::Child, CellOrder::Linear) => {
+                let $nodes = Nodes::<true, false, true>::new($v);
+                $body
+            }
+            (Tables::Compact, Skip::Child, CellOrder::Linear) => {
+                let $nodes = Nodes::<false, false, true>::new($v);
                 $body
             }
         }

@@ -41,6 +41,9 @@ pub trait WideNodes {
     type Node: Copy + Default;
     /// The node's data the loop reads, fetched once per node entered.
     type Desc: Copy + Default;
+    /// Whether slots are numbered row-major, x fastest (`vdb.order=linear`), rather than by local
+    /// Morton code: a constant of the layout, so each order is its own loop.
+    const ROW_MAJOR: bool = false;
 
     /// The node of the top cell at `cell` (coordinates in top cells), `None` if it is empty (a
     /// table read: a root-table search, a dense grid's entry).
@@ -105,6 +108,7 @@ fn descending(trace: &RefCell<Trace>) {
 impl<N: WideReads> WideNodes for Recorded<'_, N> {
     type Node = N::Node;
     type Desc = N::Desc;
+    const ROW_MAJOR: bool = N::ROW_MAJOR;
 
     fn top(&self, cell: [u32; 3]) -> Option<N::Node> {
         self.nodes.top_reads(cell, &mut self.trace.borrow_mut());
@@ -259,13 +263,20 @@ pub fn cast<N: WideNodes, S: Stats>(
     // its slot in its parent, whose data is `cur`. Over empty space the "cell" may be an aligned
     // block of `2^block` cells per axis of level `k` (see ADVANCE); `lo` and `exit` are then the
     // block's.
+    // Row-major slots: the bits per axis of level k's node, which a node the size of the grid or
+    // larger has more of than the grid shows (its slots' strides are the node's). None: Morton
+    // slots, the same code at any size.
+    let row_bits = |k: usize| match N::ROW_MAJOR && k > 0 {
+        true => Some(shifts[k - 1] - shifts[k]),
+        false => None,
+    };
     let mut k = k0;
     let mut shift = shifts[k0];
     let mut parent = grid_level;
     let mut block = 0u32;
     let mut t = t0;
     let (mut lo, mut exit) = frame.descend(t, [0; 3], frame.exits([0; 3]), parent, shift);
-    let mut slot = Slot::new(lo, shift, parent, r.mirror_mask);
+    let mut slot = Slot::new(lo, shift, parent, r.mirror_mask, row_bits(k));
     let mut cur = desc[k];
     let mut advances = 0u32;
     loop {
@@ -287,7 +298,7 @@ pub fn cast<N: WideNodes, S: Stats>(
             if block > 0 {
                 // Into the block's cell the ray is in at t.
                 (lo, exit) = frame.descend(t, lo, exit, shift + block, shift);
-                slot = Slot::new(lo, shift, parent, r.mirror_mask);
+                slot = Slot::new(lo, shift, parent, r.mirror_mask, row_bits(k));
                 block = 0;
                 continue;
             }
@@ -307,7 +318,7 @@ pub fn cast<N: WideNodes, S: Stats>(
             desc[k] = cur;
             (parent, shift) = (shift, shifts[k]);
             (lo, exit) = frame.descend(t, lo, exit, parent, shift);
-            slot = Slot::new(lo, shift, parent, r.mirror_mask);
+            slot = Slot::new(lo, shift, parent, r.mirror_mask, row_bits(k));
             continue;
         }
 
@@ -358,7 +369,7 @@ pub fn cast<N: WideNodes, S: Stats>(
                     changed |= (lo[a] ^ stepped) as u32;
                     lo[a] = stepped;
                     exit[a] = frame.plane_t(a, stepped);
-                    slot.step(a, block);
+                    slot.step(a, block, N::ROW_MAJOR);
                 }
             }
         }
@@ -385,39 +396,52 @@ pub fn cast<N: WideNodes, S: Stats>(
             block = 0;
             lo = lo.map(|x| x & !((1 << shift) - 1));
             exit = frame.exits(lo);
-            slot = Slot::new(lo, shift, parent, r.mirror_mask);
+            slot = Slot::new(lo, shift, parent, r.mirror_mask, row_bits(k));
             cur = desc[k];
         }
     }
 }
 
-/// The current cell's slot in its parent (its local Morton code, [`local_slot`]), kept up to date
-/// as the DDA steps. It is kept in the mirrored frame, where every step lowers one axis's
-/// coordinate by one — on that axis's bits of the code ("dilated" arithmetic), a subtract with the
-/// other axes' bits masked out — and turned into the stored (world) slot by flipping the mirrored
-/// axes' bits: a mirrored local coordinate is the world one's complement within the parent.
+/// The current cell's slot in its parent (its local Morton code, [`local_slot`], or its row-major
+/// index where the layout numbers slots so, [`WideNodes::ROW_MAJOR`]), kept up to date as the DDA
+/// steps. It is kept in the mirrored frame, where every step lowers one axis's coordinate by one —
+/// on that axis's bits of the slot (in Morton order "dilated" arithmetic; row-major, a field of
+/// its own), a subtract with the other axes' bits masked out — and turned into the stored (world)
+/// slot by flipping the mirrored axes' bits: a mirrored local coordinate is the world one's
+/// complement within the parent.
 #[derive(Clone, Copy)]
 struct Slot {
     /// The mirrored-frame slot.
     mirrored: u32,
-    /// Per axis, the code's bits of that axis.
+    /// Per axis, the slot's bits of that axis.
     axis: [u32; 3],
+    /// Row-major: per axis, the slot's step for one cell (Morton order's are 1, 2, 4).
+    unit: [u32; 3],
     /// The bits of the mirrored axes: `mirrored ^ flip` is the world slot.
     flip: u32,
 }
 
 impl Slot {
+    /// The slot of the cell at `lo` (side `2^shift`) in its parent (side `2^parent`, clipped to
+    /// the grid), numbered row-major in a node of `row_bits` bits per axis, or by Morton code.
     #[inline(always)]
-    fn new(lo: [i32; 3], shift: u32, parent: u32, mirror_mask: u32) -> Self {
+    fn new(lo: [i32; 3], shift: u32, parent: u32, mirror_mask: u32, row_bits: Option<u32>) -> Self {
         let bits = parent - shift;
         let m = (1 << bits) - 1;
         let local = |a: usize| (lo[a] >> shift) as u32 & m;
+        if let Some(b) = row_bits {
+            let unit = [1, 1 << b, 1 << (2 * b)];
+            let axis = unit.map(|u| m * u);
+            let flip = (0..3).filter(|a| mirror_mask >> a & 1 == 1).fold(0, |f, a| f | axis[a]);
+            let mirrored = local(0) | local(1) << b | local(2) << (2 * b);
+            return Self { mirrored, axis, unit, flip };
+        }
         let ones = spread10(m);
         let axis = [ones, ones << 1, ones << 2];
         // The mirrored axes' bits: bit a of each triple for every mirrored axis a (the triples'
         // bits lie three apart, so the product adds without carries).
         let flip = ones * mirror_mask;
-        Self { mirrored: local_slot([local(0), local(1), local(2)], bits), axis, flip }
+        Self { mirrored: local_slot([local(0), local(1), local(2)], bits), axis, unit: [1, 2, 4], flip }
     }
 
     /// The stored slot.
@@ -426,12 +450,14 @@ impl Slot {
         self.mirrored ^ self.flip
     }
 
-    /// One step along axis `a` of a block of `2^block` cells per axis: the block's bits of the
-    /// axis lie `3 · block` higher (wrapping if the step leaves the parent, where the DDA pops).
+    /// One step along axis `a` of a block of `2^block` cells per axis: in Morton order the
+    /// block's bits of the axis lie `3 · block` higher, row-major `block` higher (wrapping if the
+    /// step leaves the parent, where the DDA pops).
     #[inline(always)]
-    fn step(&mut self, a: usize, block: u32) {
+    fn step(&mut self, a: usize, block: u32, row_major: bool) {
         let m = self.axis[a];
-        self.mirrored = self.mirrored & !m | (self.mirrored & m).wrapping_sub(1 << (3 * block as usize + a)) & m;
+        let one = if row_major { self.unit[a] << block } else { 1 << (3 * block as usize + a) };
+        self.mirrored = self.mirrored & !m | (self.mirrored & m).wrapping_sub(one) & m;
     }
 }
 

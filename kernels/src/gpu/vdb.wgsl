@@ -4,7 +4,7 @@
 // the leaves' voxel masks.
 //
 // Buffers: `params` (wide_dda.wgsl's, then VDB_* below: the table mode and, per level of cells,
-// structures::vdb::layout::LevelOffsets, and the skip mode), `words` (the root table and interior nodes) and `leaves`.
+// structures::vdb::layout::LevelOffsets, the skip mode and the slot order), `words` (the root table and interior nodes) and `leaves`.
 
 const VDB_DENSE: u32 = WIDE_OWN;
 const VDB_BITS: u32 = WIDE_OWN + 1u;
@@ -13,6 +13,18 @@ const VDB_TABLE_AT: u32 = VDB_MASK_AT + MAX_DDA_LEVELS;
 const VDB_CHILD_WORDS: u32 = VDB_TABLE_AT + MAX_DDA_LEVELS;
 // 1 with vdb.skip=block.
 const VDB_SKIP_BLOCK: u32 = VDB_CHILD_WORDS + MAX_DDA_LEVELS;
+// 1 with vdb.order=linear: slots row-major, x fastest (never with vdb.skip=block).
+const VDB_LINEAR: u32 = VDB_SKIP_BLOCK + 1u;
+
+// The slot of a level-k cell at `local` in its node: its local Morton code, or row-major in a
+// node of params(VDB_BITS + k) bits per axis.
+fn vdb_slot(local: vec3<u32>, k: u32) -> u32 {
+    if (params(VDB_LINEAR) != 0u) {
+        let b = params(VDB_BITS + k);
+        return local.x | (local.y << b) | (local.z << (2u * b));
+    }
+    return wide_slot(local);
+}
 
 fn vdb_dense() -> bool {
     return params(VDB_DENSE) != 0u;
@@ -50,7 +62,7 @@ fn wide_fetch(node: u32, k: u32) -> vec4<u32> {
 }
 
 fn wide_occupied(d: vec4<u32>, k: u32, local: vec3<u32>) -> bool {
-    let s = wide_slot(local);
+    let s = vdb_slot(local, k);
     let at = d.x + params(VDB_MASK_AT + k) + (s >> 5u);
     var w: u32;
     if (k == params(WIDE_LEVELS) - 1u) {
@@ -62,7 +74,7 @@ fn wide_occupied(d: vec4<u32>, k: u32, local: vec3<u32>) -> bool {
 }
 
 fn wide_child(node: u32, d: vec4<u32>, k: u32, local: vec3<u32>) -> u32 {
-    let s = wide_slot(local);
+    let s = vdb_slot(local, k);
     if (vdb_dense()) {
         return words(node + params(VDB_TABLE_AT + k) + 2u * s);
     }

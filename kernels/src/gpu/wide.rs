@@ -67,6 +67,7 @@ pub fn vdb(v: &Vdb) -> GpuProgram<'_> {
     let o = &v.offsets;
     p.extend(o.bits.iter().chain(&o.mask_at).chain(&o.table_at).chain(&o.child_words));
     p.push(u32::from(v.params.skip == structures::vdb::Skip::Block));
+    p.push(u32::from(v.params.order == structures::voxel::morton::CellOrder::Linear));
     GpuProgram {
         label: "vdb",
         wgsl: VDB_WGSL,

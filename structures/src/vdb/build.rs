@@ -12,7 +12,10 @@ use scenes::Scene;
 use super::layout::{LevelOffsets, Sizes, Tables, mask_words, rank_words};
 use super::{Vdb, VdbParams, VdbStats};
 use crate::BuildError;
-use crate::voxel::wide::{Laid, StreamCounts, WideShape, WideSink, feed_from_octree, stream_voxelization};
+use crate::voxel::morton::CellOrder;
+use crate::voxel::wide::{
+    Laid, StreamCounts, WideShape, WideSink, feed_from_octree, slot_coords, slot_in, stream_voxelization,
+};
 use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 
 pub fn build(scene: &Scene, params: VdbParams) -> Result<Vdb, BuildError> {
@@ -45,6 +48,16 @@ struct Levels {
     leaves: Vec<u32>,
     leaf_count: u64,
     tiles: Vec<(u64, u32)>,
+    order: CellOrder,
+    /// With `vdb.order=linear`: each leaf voxel's row-major bit, by its Morton bit.
+    leaf_slots: Vec<u32>,
+    /// With `vdb.order=linear`, per level of children (1 to the leaves' level, `interior`): where
+    /// each child, named by its index as written (Morton order), moves so that every node's
+    /// children sit in its row-major slot order. A node's children are one run of its level
+    /// either way, so a child moves only within its siblings' run and the run's start stays.
+    moved: Vec<Vec<u32>>,
+    /// A node's children with their slots in `order`, sorted by slot (reused per node).
+    scratch: Vec<(u32, u32)>,
 }
 
 impl Levels {
@@ -59,6 +72,18 @@ impl Levels {
             leaves: Vec::new(),
             leaf_count: 0,
             tiles: Vec::new(),
+            order: params.order,
+            leaf_slots: match params.order {
+                CellOrder::Morton => Vec::new(),
+                CellOrder::Linear => {
+                    let b = params.log2[interior];
+                    (0..1 << (3 * b))
+                        .map(|v| slot_in(CellOrder::Linear, slot_coords(CellOrder::Morton, v, b), b))
+                        .collect()
+                }
+            },
+            moved: vec![Vec::new(); interior + 1],
+            scratch: Vec::new(),
         }
     }
 
@@ -83,8 +108,22 @@ impl WideSink for Levels {
             out[..3].copy_from_slice(&origin);
         }
         let mask = &mut out[self.sizes.leaf_mask()..self.sizes.leaf_mask() + mask_words(bits)];
-        for (i, w) in mask.iter_mut().enumerate() {
-            *w = (voxels[i / 2] >> (32 * (i % 2))) as u32;
+        match self.order {
+            CellOrder::Morton => {
+                for (i, w) in mask.iter_mut().enumerate() {
+                    *w = (voxels[i / 2] >> (32 * (i % 2))) as u32;
+                }
+            }
+            CellOrder::Linear => {
+                for (i, &word) in voxels.iter().enumerate() {
+                    let mut m = word;
+                    while m != 0 {
+                        let s = self.leaf_slots[64 * i + m.trailing_zeros() as usize];
+                        mask[(s >> 5) as usize] |= 1 << (s & 31);
+                        m &= m - 1;
+                    }
+                }
+            }
         }
         self.leaf_count += 1;
         (self.leaf_count - 1) as u32
@@ -94,6 +133,27 @@ impl WideSink for Levels {
         let bits = self.bits[level];
         let sizes = self.sizes;
         let origin = self.origin(code, self.shape.shifts[level]);
+        // The children with their slots in this tree's order, in slot order; with `linear`, each
+        // child's place among its siblings (`moved`).
+        let mut ordered = std::mem::take(&mut self.scratch);
+        ordered.clear();
+        match self.order {
+            CellOrder::Morton => ordered.extend_from_slice(children),
+            CellOrder::Linear => {
+                let linear = |s: u32| slot_in(CellOrder::Linear, slot_coords(CellOrder::Morton, s, bits), bits);
+                ordered.extend(children.iter().map(|&(s, child)| (linear(s), child)));
+                ordered.sort_unstable();
+                let moved = &mut self.moved[level + 1];
+                let first = children[0].1;
+                for (rank, &(_, child)) in ordered.iter().enumerate() {
+                    if moved.len() <= child as usize {
+                        moved.resize(child as usize + 1, u32::MAX);
+                    }
+                    moved[child as usize] = first + rank as u32;
+                }
+            }
+        }
+        let children = &ordered[..];
         let out = &mut self.nodes[level];
         let at = out.len();
         out.resize(at + sizes.node_words(bits), 0);
@@ -112,9 +172,11 @@ impl WideSink for Levels {
                 }
             }
             Tables::Compact => {
-                // Children arrive in slot order, one after another in the level below.
-                debug_assert!(children.windows(2).all(|w| w[1].1 == w[0].1 + 1));
-                node[0] = children[0].1;
+                // Children arrive in Morton slot order, one after another in the level below
+                // (with `linear`, `moved` reorders that run by row-major slot; it starts at the
+                // same index).
+                debug_assert!(self.order == CellOrder::Linear || children.windows(2).all(|w| w[1].1 == w[0].1 + 1));
+                node[0] = children.iter().map(|c| c.1).min().unwrap_or(0);
                 let (m, mut rank) = (mask_words(bits), 0);
                 for g in 0..rank_words(bits) {
                     node[table + g] = rank;
@@ -125,6 +187,7 @@ impl WideSink for Levels {
                 }
             }
         }
+        self.scratch = ordered;
         self.counts[level] += 1;
         (self.counts[level] - 1) as u32
     }
@@ -190,7 +253,17 @@ fn lay_out(mut levels: Levels) -> Result<Laid, BuildError> {
         starts.push(starts[starts.len() - 1] + l.len() as u32);
     }
     let leaf_words = sizes.leaf_words(levels.bits[levels.bits.len() - 1]) as u32;
-    // Where child `index` of a level-`l` node lies (level l + 1 interior, or a leaf).
+    // With `linear`, every level below the top in its parents' row-major slot order.
+    if levels.order == CellOrder::Linear {
+        for l in 1..interior {
+            levels.nodes[l] = moved_nodes(&levels.nodes[l], sizes.node_words(levels.bits[l]), &levels.moved[l]);
+        }
+        levels.leaves = moved_nodes(&levels.leaves, leaf_words as usize, &levels.moved[interior]);
+    }
+    let moved = std::mem::take(&mut levels.moved);
+    // Where child `index` of a level-`l` node lies (level l + 1 interior, or a leaf), and where
+    // the child written as `index` went (a compact node's run starts where it did).
+    let renamed = |l: usize, index: u32| moved[l + 1].get(index as usize).copied().unwrap_or(index);
     let child_word = |l: usize, index: u32| -> u32 {
         match l + 1 < interior {
             true => starts[l + 1] + index * sizes.node_words(levels.bits[l + 1]) as u32,
@@ -222,7 +295,7 @@ fn lay_out(mut levels: Levels) -> Result<Laid, BuildError> {
                         let mut m = node[mask + w];
                         while m != 0 {
                             let slot = 32 * w + m.trailing_zeros() as usize;
-                            node[table + 2 * slot] = child_word(l, node[table + 2 * slot]);
+                            node[table + 2 * slot] = child_word(l, renamed(l, node[table + 2 * slot]));
                             m &= m - 1;
                         }
                     }
@@ -233,4 +306,14 @@ fn lay_out(mut levels: Levels) -> Result<Laid, BuildError> {
     }
     debug_assert_eq!(words.len() as u64, total);
     Ok(Laid { words, leaves: std::mem::take(&mut levels.leaves), level_starts: starts })
+}
+
+/// A level's nodes of `size` words each, node `i` moved to `moved[i]`.
+fn moved_nodes(nodes: &[u32], size: usize, moved: &[u32]) -> Vec<u32> {
+    let mut out = vec![0; nodes.len()];
+    for (i, node) in nodes.chunks_exact(size).enumerate() {
+        let j = moved[i] as usize;
+        out[j * size..(j + 1) * size].copy_from_slice(node);
+    }
+    out
 }

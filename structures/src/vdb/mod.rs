@@ -8,6 +8,9 @@
 //! `vdb.skip=child` traverses as NanoVDB's HDDA does, an empty child of the node the ray is in at
 //! a time; `block` also steps over whole empty aligned blocks of 2ᵏ children (found from the
 //! Morton-ordered mask: a block's children are consecutive bits), as the 64-tree coalesces.
+//! `vdb.order=morton` (default) numbers child slots and voxel bits by local Morton code, the
+//! voxeliser's order; `linear` numbers them row-major, x fastest, as NanoVDB does (issue 43: the
+//! cost of each order's slot arithmetic against where its siblings sit).
 //!
 //! | file | what |
 //! |---|---|
@@ -29,6 +32,7 @@ use serde_json::json;
 pub use layout::Tables;
 
 use crate::svo::voxel_params_json;
+use crate::voxel::morton::CellOrder;
 use crate::voxel::wide::{DdaLevels, MAX_SHIFT, WideShape};
 use crate::voxel::{self, VoxelGrid, VoxelizeStats};
 use crate::{BuildError, BuildInput, MemoryReport, Structure};
@@ -41,6 +45,10 @@ pub struct VdbParams {
     pub log2: Vec<u32>,
     pub tables: Tables,
     pub skip: Skip,
+    /// How child slots and voxel bits are numbered in a node (`vdb.order`): by local Morton code
+    /// (the default, which `vdb.skip=block` needs), or row-major (NanoVDB's numbering). Each
+    /// node's children are stored in its slot order, so the order also decides where siblings sit.
+    pub order: CellOrder,
 }
 
 /// What the traversal steps over at a time inside a node (`vdb.skip`).
@@ -88,7 +96,16 @@ impl VdbParams {
             });
         }
         let skip = params.choice("vdb.skip", Skip::Child, &[("child", Skip::Child), ("block", Skip::Block)])?;
-        Ok(Self { level, log2, tables, skip })
+        let order = params.choice("vdb.order", CellOrder::Morton, &CellOrder::NAMES)?;
+        if order == CellOrder::Linear && skip == Skip::Block {
+            return Err(BuildError::BadParam {
+                key: "vdb.skip".into(),
+                detail: "block needs vdb.order=morton: an empty block of 2^k children per axis is a run of \
+                         consecutive mask bits only in Morton order"
+                    .into(),
+            });
+        }
+        Ok(Self { level, log2, tables, skip, order })
     }
 
     /// The cube sides: the top nodes' (`2^S`, S the sum of the bits), then each level's children.

@@ -8,7 +8,8 @@
 use super::Vdb;
 use super::layout::{Tables, bit, mask_words, rank_words};
 use crate::voxel::morton;
-use crate::voxel::wide::local_slot;
+use crate::voxel::morton::CellOrder;
+use crate::voxel::wide::{slot_coords, slot_in};
 
 /// The structural checks above; `Err` says what is wrong and where.
 pub fn validate(v: &Vdb) -> Result<(), String> {
@@ -113,14 +114,20 @@ pub fn validate(v: &Vdb) -> Result<(), String> {
                     (0..set.len() as u32).map(|i| node[0] + i * size_of(l + 1) as u32).collect()
                 }
             };
+            let mut previous = None;
             for (&s, &child) in set.iter().zip(&children) {
                 let Some(c) = index_at(l + 1, child) else {
                     return Err(format!("{here}: child {s} at word {child} is not a node of level {}", l + 1));
                 };
+                // Siblings sit one after another in the node's slot order (either order's).
+                if previous.is_some_and(|p| c != p + 1) {
+                    return Err(format!("{here}: child {s} is node {c} of level {}, not next to its sibling", l + 1));
+                }
+                previous = Some(c);
                 if below[c].is_some() {
                     return Err(format!("{here}: child {s} at word {child} is reached twice"));
                 }
-                let local = morton::decode(s as u64);
+                let local = slot_coords(v.params.order, s, b);
                 below[c] = Some(std::array::from_fn(|a| origin[a] + (local[a] << shape.shifts[l + 1])));
             }
         }
@@ -150,7 +157,7 @@ pub fn validate(v: &Vdb) -> Result<(), String> {
     Ok(())
 }
 
-/// Every voxel's Morton code, increasing (tiles by key, then depth first in slot order).
+/// Every voxel's Morton code, increasing (tiles by key, then depth first in local Morton order).
 pub fn expand(v: &Vdb) -> Vec<u64> {
     let sizes = v.params.sizes();
     let mut out = Vec::with_capacity(v.voxels as usize);
@@ -168,18 +175,24 @@ fn walk(v: &Vdb, level: usize, at: usize, code: u64, out: &mut Vec<u64>) {
     let b = bits[level];
     if level + 1 == bits.len() {
         let mask = &v.leaves[at + sizes.leaf_mask()..];
-        out.extend((0..1u32 << (3 * b)).filter(|&s| bit(mask, s)).map(|s| code << (3 * b) | s as u64));
+        out.extend((0..1u32 << (3 * b)).filter(|&m| bit(mask, slot_of(v, m, b))).map(|m| code << (3 * b) | m as u64));
         return;
     }
     let child_words = match level + 2 == bits.len() {
         true => sizes.leaf_words(bits[level + 1]),
         false => sizes.node_words(bits[level + 1]),
     } as u32;
-    for s in 0..1u32 << (3 * b) {
-        if let Some(child) = sizes.child(&v.words, at, b, s, child_words) {
-            walk(v, level + 1, child as usize, code << (3 * b) | s as u64, out);
+    for m in 0..1u32 << (3 * b) {
+        if let Some(child) = sizes.child(&v.words, at, b, slot_of(v, m, b), child_words) {
+            walk(v, level + 1, child as usize, code << (3 * b) | m as u64, out);
         }
     }
+}
+
+/// The slot, in the tree's order, of the cell whose local Morton code is `m` (so the expansion
+/// walks in Morton order whatever the tree's).
+fn slot_of(v: &Vdb, m: u32, bits: u32) -> u32 {
+    slot_in(v.params.order, slot_coords(CellOrder::Morton, m, bits), bits)
 }
 
 /// Whether the voxel at integer coordinates `c` is set: the root tile, then one slot per level.
@@ -189,7 +202,7 @@ pub fn contains(v: &Vdb, c: [u32; 3]) -> bool {
     let shifts = v.shape().dda_shifts();
     let Some(mut at) = sizes.find_tile(&v.words, morton::encode(c.map(|x| x >> shifts[0]))) else { return false };
     for (l, &b) in bits.iter().enumerate() {
-        let slot = local_slot(c.map(|x| (x >> shifts[l + 1]) & ((1 << b) - 1)), b);
+        let slot = slot_in(v.params.order, c.map(|x| (x >> shifts[l + 1]) & ((1 << b) - 1)), b);
         if l + 1 == bits.len() {
             return bit(&v.leaves[at as usize + sizes.leaf_mask()..], slot);
         }

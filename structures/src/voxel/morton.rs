@@ -95,7 +95,8 @@ const POPCOUNT8: [u8; 256] = {
 /// The order of a structure's dense table of cells (`<structure>.order`): row-major, x fastest
 /// (`linear`), or by Morton index (`morton`, through [`Morton::detect`]'s encoder). The table
 /// holds the same entries either way; only where each one sits changes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum CellOrder {
     #[default]
     Linear,

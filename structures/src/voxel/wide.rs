@@ -19,6 +19,7 @@
 //! - [`feed_from_octree`]: the canonical octree's levels, bottom-up one level at a time (the
 //!   independent path the tests compare the stream with, word for word).
 
+use super::morton::CellOrder;
 use super::{CodeBounds, Octree};
 
 /// The deepest cube side a wide tree may have, as `log2` voxels: 3·20 bits of a Morton code.
@@ -348,6 +349,29 @@ pub fn local_slot(c: [u32; 3], bits: u32) -> u32 {
     spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2
 }
 
+/// The slot of local cell coordinates `c` (each below `2^bits`, `bits` ≤ 10) in a node's table
+/// of `2^(3·bits)` slots, in `order`: the local Morton code ([`local_slot`]), or row-major with x
+/// fastest, `x | y << bits | z << 2·bits` (NanoVDB's numbering, up to the axes' roles; `vdb.order`).
+#[inline(always)]
+pub fn slot_in(order: CellOrder, c: [u32; 3], bits: u32) -> u32 {
+    match order {
+        CellOrder::Morton => local_slot(c, bits),
+        CellOrder::Linear => c[0] | c[1] << bits | c[2] << (2 * bits),
+    }
+}
+
+/// The local cell coordinates of slot `s` of a node with `bits` bits per axis in `order`: the
+/// inverse of [`slot_in`].
+pub fn slot_coords(order: CellOrder, s: u32, bits: u32) -> [u32; 3] {
+    match order {
+        CellOrder::Morton => super::morton::decode(u64::from(s)),
+        CellOrder::Linear => {
+            let m = (1 << bits) - 1;
+            [s & m, s >> bits & m, s >> (2 * bits) & m]
+        }
+    }
+}
+
 /// Spreads the low 10 bits of `x` so bit `i` lands on bit `3i` (the WGSL kernels' `spread10`).
 #[inline(always)]
 pub fn spread10(x: u32) -> u32 {
@@ -472,6 +496,30 @@ mod tests {
                     for z in [0, 1, (1 << bits) - 1] {
                         assert_eq!(local_slot([x, y, z], bits) as u64, morton::encode([x, y, z]));
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn slots_in_either_order_are_a_bijection_with_their_coordinates() {
+        for order in [CellOrder::Morton, CellOrder::Linear] {
+            for bits in [1, 2, 3, 5] {
+                let n = 1u32 << bits;
+                let mut seen = vec![false; 1 << (3 * bits)];
+                for z in 0..n {
+                    for y in 0..n {
+                        for x in 0..n {
+                            let s = slot_in(order, [x, y, z], bits);
+                            assert!(!std::mem::replace(&mut seen[s as usize], true), "{order:?} {bits}: {s} twice");
+                            assert_eq!(slot_coords(order, s, bits), [x, y, z], "{order:?} {bits}");
+                        }
+                    }
+                }
+                // Row-major is x fastest: the next x is the next slot.
+                if order == CellOrder::Linear {
+                    assert_eq!(slot_in(order, [1, 0, 0], bits), 1);
+                    assert_eq!(slot_in(order, [0, 0, 1], bits), n * n);
                 }
             }
         }
