@@ -201,7 +201,7 @@ fn list(what: ListWhat) {
              (row-major, Morton), distfield beside svo, esvo (contours off, on), svdag and bvh on six scenes at 1024³…8192³, 1024×1024"
         );
         println!(
-            "  morton     Morton against row-major cells: ug at λ = 1/8, 5, 64 and brickmap at 512³…4096³, each row-major, Morton by pdep and by tables, on bunny, dragon, city at 1024×1024"
+            "  morton     Morton against row-major cells: ug at λ = 1/8, 5, 64 and brickmap at 512³…4096³, each row-major, Morton by pdep and by tables; vdb at 1024³…4096³ with Morton and row-major slots; on bunny, dragon, city at 1024×1024"
         );
         println!(
             "  volume     seed 003's volumes: mri-ch2, mri-ch2better, marschner-lobb@256, fog@dragon:512, particles at 1024³ and 2048³ through dense, bricks, octree, vdb, tree64 at 1 / 10 / 30 / 100 % visible voxels, 1024×1024"

@@ -169,6 +169,14 @@ impl Preset {
             (Preset::Ci, "ug") => {
                 vec![(Vec::new(), None), (vec!["ug.order=morton".into()], Some("morton".into()))]
             }
+            // The VDB's slots and the brickmap's bricks row-major beside Morton order: the same
+            // steps, the same bytes.
+            (Preset::Ci, "vdb") => {
+                vec![(Vec::new(), None), (vec!["vdb.order=linear".into()], Some("linear".into()))]
+            }
+            (Preset::Ci, "brickmap") => {
+                vec![(Vec::new(), None), (vec!["brickmap.brick_order=linear".into()], Some("rows".into()))]
+            }
             (Preset::SimdParity, "kdtree" | "octree") => {
                 vec![(Vec::new(), None), (vec!["simd=scalar".into()], Some("scalar".into()))]
             }
@@ -257,12 +265,26 @@ impl Preset {
                     ]
                 })
                 .collect(),
+            // The brickmap's bricks too: their voxel bits row-major against by Morton code.
             (Preset::Morton, "brickmap") => (9..=12)
                 .flat_map(|l| {
                     [
                         at(l, &[], None),
                         at(l, &["brickmap.order=morton"], Some("morton")),
                         at(l, &["brickmap.order=morton", "morton.encoder=table"], Some("morton-table")),
+                        at(l, &["brickmap.brick_order=linear"], Some("rows")),
+                    ]
+                })
+                .collect(),
+            // The VDB's slots and voxel bits by local Morton code (its default) and row-major
+            // (NanoVDB's), in both table modes, at 1024³…4096³.
+            (Preset::Morton, "vdb") => (10..=12)
+                .flat_map(|l| {
+                    [
+                        at(l, &["vdb.tables=dense", "vdb.order=linear"], Some("dense")),
+                        at(l, &["vdb.tables=dense", "vdb.order=morton"], Some("dense-morton")),
+                        at(l, &["vdb.tables=compact", "vdb.order=linear"], Some("compact")),
+                        at(l, &["vdb.tables=compact", "vdb.order=morton"], Some("compact-morton")),
                     ]
                 })
                 .collect(),
@@ -290,7 +312,7 @@ impl Preset {
             }
             Preset::EsvoBeam => vec!["bvh", "esvo"],
             Preset::VoxelGrids => vec!["bvh", "vdb", "tree64", "brickmap", "distfield", "svo", "esvo", "svdag"],
-            Preset::Morton => vec!["ug", "brickmap"],
+            Preset::Morton => vec!["ug", "brickmap", "vdb"],
             Preset::Volume => kernels::volume::VOLUME_STRUCTURES.iter().map(|e| e.name).collect(),
             Preset::VolumeOoc => kernels::volume::ooc::page_table::SCHEMES.to_vec(),
             // Its parts name their own.

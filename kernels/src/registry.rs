@@ -237,10 +237,12 @@ pub static STRUCTURES: &[StructureEntry] = &[
         name: "brickmap",
         family: "voxel",
         summary: "brickmap (van Wingerden 2015): dense top grid of pointers to 8³ bit bricks (row-major, or Morton order: \
-                  brickmap.order=morton, morton.encoder=auto|table), two-level DDA; --levels L",
+                  brickmap.order=morton, morton.encoder=auto|table; each brick's voxels by Morton code or row-major: \
+                  brickmap.brick_order=morton|linear), two-level DDA; --levels L",
         params: &structures::brickmap::KEYS,
         check: |p| {
             structures::brickmap::level_param(p).and(structures::brickmap::order_param(p))?;
+            structures::brickmap::brick_order_param(p)?;
             structures::voxel::morton::Morton::from_params(p).map(drop)
         },
         build: |input| Ok(Box::new(structures::brickmap::Brickmap::build(input)?)),

@@ -258,7 +258,7 @@ fn voxel_grid_variants() {
     let Some(ctx) = context_for_tests("gpu::voxel_grid_variants") else {
         return;
     };
-    let variants: [(&str, &str, &[&str]); 11] = [
+    let variants: [(&str, &str, &[&str]); 12] = [
         ("vdb-compact", "vdb", &["vdb.tables=compact"]),
         ("vdb-linear", "vdb", &["vdb.order=linear"]),
         ("vdb-linear-compact-433", "vdb", &["vdb.order=linear", "vdb.tables=compact", "vdb.log2=4,3,3"]),
@@ -268,6 +268,7 @@ fn voxel_grid_variants() {
         ("tree64-dag", "tree64", &["tree64.dag=on"]),
         ("brickmap", "brickmap", &[]),
         ("brickmap-morton", "brickmap", &["brickmap.order=morton"]),
+        ("brickmap-rows", "brickmap", &["brickmap.brick_order=linear"]),
         ("distfield", "distfield", &[]),
         ("distfield-cap2", "distfield", &["distfield.cap=2"]),
     ];

@@ -28,6 +28,7 @@ const TRACED: &[(&str, &[&str])] = &[
     ("tree64", &["voxel.levels=8"]),
     ("tree64", &["voxel.levels=8", "tree64.dag=on"]),
     ("brickmap", &["voxel.levels=8"]),
+    ("brickmap", &["voxel.levels=8", "brickmap.brick_order=linear"]),
     ("distfield", &["voxel.levels=8"]),
     ("vdb", &["voxel.levels=8", "vdb.tables=dense", "vdb.skip=child"]),
     ("vdb", &["voxel.levels=8", "vdb.tables=compact", "vdb.skip=block", "vdb.log2=3,2,2"]),

@@ -60,12 +60,17 @@ const VDB_VARIANTS: [&[&str]; 7] = [
     &["vdb.order=linear", "vdb.log2=4,2,3", "vdb.tables=compact"],
 ];
 
+/// The brickmap's top grid in Morton order and its bricks' voxels row-major.
+const BRICK_ROWS: [&str; 2] = ["brickmap.order=morton", "brickmap.brick_order=linear"];
+
 /// Every hierarchical grid of one scene at one level.
 struct Grids {
     vdbs: Vec<(String, Vdb)>,
     tree: Tree64,
     dag: Tree64,
     map: Brickmap,
+    /// The brickmap with its top grid in Morton order and its bricks row-major.
+    map_rows: Brickmap,
     field: Distfield,
 }
 
@@ -88,6 +93,8 @@ impl Grids {
             tree: tree64(&[]),
             dag: tree64(&["tree64.dag=on"]),
             map: Brickmap::build(&input(scene, &p)).unwrap_or_else(|e| panic!("{}: {e}", scene.name)),
+            map_rows: Brickmap::build(&input(scene, &params(level, &BRICK_ROWS)))
+                .unwrap_or_else(|e| panic!("{}: {e}", scene.name)),
             field: Distfield::build(&input(scene, &p)).unwrap_or_else(|e| panic!("{}: {e}", scene.name)),
         }
     }
@@ -104,6 +111,7 @@ impl Grids {
         out.push(("tree64".into(), &self.tree, self.tree.levels));
         out.push(("tree64 dag".into(), &self.dag, self.dag.levels));
         out.push(("brickmap".into(), &self.map, self.map.levels));
+        out.push(("brickmap rows".into(), &self.map_rows, self.map_rows.levels));
         out.push(("distfield".into(), &self.field, self.field.levels));
         out
     }
@@ -121,8 +129,10 @@ impl Grids {
             assert_eq!(tree64::validate::expand(t), set.codes, "{name} {n}: expands to the voxelisation");
             assert_eq!(t.memory().total_bytes(), (t.words.len() + t.bricks.len()) as u64 * 4, "{name} {n}");
         }
-        brickmap::validate::validate(&self.map).unwrap_or_else(|e| panic!("{name} brickmap: {e}"));
-        assert_eq!(brickmap::validate::expand(&self.map), set.codes, "{name} brickmap: expands to the voxelisation");
+        for (n, map) in [("brickmap", &self.map), ("brickmap rows", &self.map_rows)] {
+            brickmap::validate::validate(map).unwrap_or_else(|e| panic!("{name} {n}: {e}"));
+            assert_eq!(brickmap::validate::expand(map), set.codes, "{name} {n}: expands to the voxelisation");
+        }
         distfield::validate::validate(&self.field).unwrap_or_else(|e| panic!("{name} distfield: {e}"));
         assert_eq!(distfield::validate::expand(&self.field), set.codes, "{name} distfield: expands to the voxels");
         assert!(self.dag.words.len() <= self.tree.words.len() && self.dag.bricks.len() <= self.tree.bricks.len());
@@ -165,13 +175,29 @@ fn exact_at_level_9(name: &str) {
 tests::per_builtin_scene!(exact_at_level_9);
 
 /// `vdb.order=linear` (slots row-major, NanoVDB's numbering) against the default local Morton
-/// order, in both table modes, on scene `name` at L = 10: the same words per node kind but not
-/// the same words (the slots moved), and on the shared ray set the same hit (`t` and voxel bit for
-/// bit) and the same counters for every ray.
-fn check_vdb_orders(name: &str) {
+/// order, in both table modes, and the brickmap's bricks row-major against Morton, on scene
+/// `name` at L = 10: as many words but not the same words (the slots moved), and on the shared ray
+/// set the same hit (`t` and voxel bit for bit) and the same counters for every ray.
+fn check_slot_orders(name: &str) {
     let level = 10;
     let scene = load(name);
     let rays = ray_set(&scene, &scene.triangles(), 3000, 0x43 ^ name.len() as u64);
+    let same_walks = |what: &str, a: &dyn Traverse, b: &dyn Traverse| {
+        for r in &rays {
+            let (mut ca, mut cb) = (Counters::default(), Counters::default());
+            let want = a.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut ca).map(|h| (h.prim, h.t.to_bits()));
+            let got = b.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut cb).map(|h| (h.prim, h.t.to_bits()));
+            assert_eq!(got, want, "{name} {what}: row-major differs from Morton on a {} ray {:?}", r.kind, r.ray);
+            assert_eq!(cb, ca, "{name} {what}: counters differ on a {} ray {:?}", r.kind, r.ray);
+        }
+    };
+    let bricks = |extra: &[&str]| {
+        Brickmap::build(&input(&scene, &params(level, extra))).unwrap_or_else(|e| panic!("{name} brickmap: {e}"))
+    };
+    let (morton, rows) = (bricks(&[]), bricks(&["brickmap.brick_order=linear"]));
+    assert_eq!((&rows.top, rows.bricks.len()), (&morton.top, morton.bricks.len()), "{name}: brickmap layout");
+    assert!(morton.voxels < 2 || rows.bricks != morton.bricks, "{name}: row-major bricks hold Morton's words");
+    same_walks("brickmap bricks", &morton, &rows);
     for tables in ["vdb.tables=dense", "vdb.tables=compact"] {
         let build = |order: &str| {
             let p = params(level, &[tables, order]);
@@ -185,19 +211,13 @@ fn check_vdb_orders(name: &str) {
             morton.voxels < 2 || (&linear.words, &linear.leaves) != (&morton.words, &morton.leaves),
             "{name} {tables}: the row-major tree has the Morton tree's words"
         );
-        for r in &rays {
-            let (mut a, mut b) = (Counters::default(), Counters::default());
-            let want = morton.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut a).map(|h| (h.prim, h.t.to_bits()));
-            let got = linear.intersect_counted(&r.ray, 0.0, f32::INFINITY, &mut b).map(|h| (h.prim, h.t.to_bits()));
-            assert_eq!(got, want, "{name} {tables}: row-major differs from Morton on a {} ray {:?}", r.kind, r.ray);
-            assert_eq!(b, a, "{name} {tables}: counters differ on a {} ray {:?}", r.kind, r.ray);
-        }
+        same_walks(&format!("vdb {tables}"), &morton, &linear);
     }
 }
 
-mod vdb_orders {
-    use super::check_vdb_orders;
-    tests::per_builtin_scene!(check_vdb_orders);
+mod slot_orders {
+    use super::check_slot_orders;
+    tests::per_builtin_scene!(check_slot_orders);
 }
 
 #[test]
@@ -257,6 +277,7 @@ fn random_rays_and_point_queries_at_level_12() {
                 assert_eq!(tree64::validate::contains(&grids.tree, c), want, "{name} tree64: point {c:?}");
                 assert_eq!(tree64::validate::contains(&grids.dag, c), want, "{name} tree64 dag: point {c:?}");
                 assert_eq!(brickmap::validate::contains(&grids.map, c), want, "{name} brickmap: point {c:?}");
+                assert_eq!(brickmap::validate::contains(&grids.map_rows, c), want, "{name} brickmap rows: {c:?}");
                 assert_eq!(distfield::validate::contains(&grids.field, c), want, "{name} distfield: point {c:?}");
             }
         }

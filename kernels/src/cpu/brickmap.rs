@@ -10,6 +10,7 @@ use glam::Vec3;
 use scenes::{Camera, Ray};
 use structures::brickmap::{BRICK_WORDS, Brickmap};
 use structures::voxel::VoxelGrid;
+use structures::voxel::morton::CellOrder;
 use structures::voxel::wide::DdaLevels;
 
 use super::wide_dda::{WideNodes, WideReads, trace, trace_recorded};
@@ -26,6 +27,11 @@ pub(crate) trait BrickGrid {
     fn bricks(&self) -> &[u32];
     /// The voxel grid, the DDA's levels and the box the bricks occupy.
     fn frame(&self) -> (&VoxelGrid, &DdaLevels, &[Vec3; 2]);
+    /// Whether a brick's voxel bits are row-major (`brickmap.brick_order=linear`), not by local
+    /// Morton code.
+    fn row_major_bricks(&self) -> bool {
+        false
+    }
 }
 
 impl BrickGrid for Brickmap {
@@ -43,16 +49,20 @@ impl BrickGrid for Brickmap {
     fn frame(&self) -> (&VoxelGrid, &DdaLevels, &[Vec3; 2]) {
         (&self.grid, &self.levels, &self.occupied)
     }
+    fn row_major_bricks(&self) -> bool {
+        self.brick_order == CellOrder::Linear
+    }
 }
 
-/// A node is a brick's first word.
-struct Nodes<'a, G> {
+/// A node is a brick's first word; `LINEAR`: its voxel bits are row-major.
+struct Nodes<'a, G, const LINEAR: bool> {
     grid: &'a G,
 }
 
-impl<G: BrickGrid> WideNodes for Nodes<'_, G> {
+impl<G: BrickGrid, const LINEAR: bool> WideNodes for Nodes<'_, G, LINEAR> {
     type Node = u32;
     type Desc = u32;
+    const ROW_MAJOR: bool = LINEAR;
 
     #[inline(always)]
     fn top(&self, cell: [u32; 3]) -> Option<u32> {
@@ -78,7 +88,7 @@ impl<G: BrickGrid> WideNodes for Nodes<'_, G> {
 
 /// The WGSL reads a top cell's word from its buffer 1, `top`, and the word of a voxel's bit from
 /// buffer 2, `bricks`.
-impl<G: BrickGrid> WideReads for Nodes<'_, G> {
+impl<G: BrickGrid, const LINEAR: bool> WideReads for Nodes<'_, G, LINEAR> {
     fn top_reads(&self, cell: [u32; 3], to: &mut Trace) {
         to.read(1, self.grid.top_index(cell) as u64 * 4, 4);
     }
@@ -100,7 +110,10 @@ pub(crate) fn trace_bricks<G: BrickGrid, S: Stats>(
         return None;
     }
     let (voxels, levels, occupied) = grid.frame();
-    trace(&Nodes { grid }, levels, voxels, occupied, ray, t_min, t_max, stats)
+    match grid.row_major_bricks() {
+        true => trace(&Nodes::<G, true> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats),
+        false => trace(&Nodes::<G, false> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats),
+    }
 }
 
 /// [`trace_bricks`] with its steps and reads recorded.
@@ -115,7 +128,10 @@ pub(crate) fn trace_bricks_recorded<G: BrickGrid>(
         return Some(None);
     }
     let (voxels, levels, occupied) = grid.frame();
-    Some(trace_recorded(&Nodes { grid }, levels, voxels, occupied, ray, t_min, t_max, to))
+    Some(match grid.row_major_bricks() {
+        true => trace_recorded(&Nodes::<G, true> { grid }, levels, voxels, occupied, ray, t_min, t_max, to),
+        false => trace_recorded(&Nodes::<G, false> { grid }, levels, voxels, occupied, ray, t_min, t_max, to),
+    })
 }
 
 impl Traverse for Brickmap {

@@ -2,8 +2,13 @@
 // shared hierarchical DDA (wide_dda.wgsl) on two levels, the dense top grid of brick pointers and
 // the 512 voxel bits of a brick (brick_cells.wgsl).
 //
-// Buffers: `params` (wide_dda.wgsl's, then the top grid's cells per axis and its order: 0 x
-// fastest, 1 Morton), `top` (0, or a brick's index plus one) and `bricks` (16 words each).
+// Buffers: `params` (wide_dda.wgsl's, then the top grid's cells per axis, its order: 0 x fastest,
+// 1 Morton, and the bricks' order: 0 Morton, 1 row-major), `top` (0, or a brick's index plus one)
+// and `bricks` (16 words each).
+
+fn bricks_row_major() -> bool {
+    return params(WIDE_OWN + 2u) == 1u;
+}
 
 // The low 10 bits of v spread to every third bit (a top grid of up to 1024 cells per axis; larger
 // ones pass the GPU's binding limits first).

@@ -7,6 +7,11 @@
 // brick's index; set: an empty cell, its low 8 bits the Chebyshev distance in top cells to the
 // nearest brick) and `bricks` (16 words each).
 
+// Its bricks' voxel bits are by local Morton code.
+fn bricks_row_major() -> bool {
+    return false;
+}
+
 const DF_EMPTY: u32 = 0x80000000u;
 const DF_DISTANCE: u32 = 0xffu;
 

@@ -81,6 +81,7 @@ pub fn brickmap(b: &Brickmap) -> GpuProgram<'_> {
     let mut p = common(&b.grid, b.is_empty(), &b.occupied, &b.levels);
     p.push(b.side);
     p.push(u32::from(b.order == structures::voxel::morton::CellOrder::Morton));
+    p.push(u32::from(b.brick_order == structures::voxel::morton::CellOrder::Linear));
     GpuProgram {
         label: "brickmap",
         wgsl: BRICKMAP_WGSL,

@@ -19,10 +19,12 @@ const TABLES: [&str; 2] = ["cells", "top_grid"];
 /// The padding a Morton order adds to a table (`structures::grid`'s memory component).
 const PADDING: &str = "Morton padding";
 
-/// Parameter `key` of a case: at the top of its parameters (the grids) or under its structure's
-/// name (the voxel structures, beside the voxelisation's).
+/// Parameter `key` of a case: at the top of its parameters (the grids), under its structure's
+/// name (the voxel structures, beside the voxelisation's), or in that structure's own parameters
+/// (`vdb`'s).
 fn param<'a>(c: &'a Case, key: &str) -> Option<&'a serde_json::Value> {
-    c.params.get(key).or_else(|| c.params.get(&c.structure)?.get(key))
+    let own = c.params.get(&c.structure);
+    c.params.get(key).or_else(|| own?.get(key)).or_else(|| own?.get("params")?.get(key))
 }
 
 /// The cell order a case was built with (`linear` or `morton`); `None` for a structure without one.
@@ -65,10 +67,14 @@ fn ratio(a: &Case, b: &Case) -> Option<f64> {
     (rb.mrays_per_s > 0.0).then(|| ra.mrays_per_s / rb.mrays_per_s)
 }
 
-/// Bytes of the case's dense cell table, its padding included.
+/// Bytes of the case's dense cell table, its padding included; for a structure whose every node
+/// is ordered (`vdb`'s tables and leaves), all its bytes.
 fn table_bytes(c: &Case) -> u64 {
     let parts = &c.memory.components;
-    TABLES.iter().chain([&PADDING]).filter_map(|k| parts.get(*k)).sum()
+    match TABLES.iter().chain([&PADDING]).filter_map(|k| parts.get(*k)).sum() {
+        0 => c.memory.bytes,
+        table => table,
+    }
 }
 
 fn mib(bytes: u64) -> String {
@@ -104,11 +110,76 @@ fn rows<'a>(cases: &[&'a Case]) -> Vec<Row<'a>> {
     out
 }
 
+/// The brickmap cases with row-major bricks (`brickmap.brick_order=linear`), each with its twin
+/// of Morton bricks: same scene, resolution and top-grid order, the variant without `rows`.
+fn brick_pairs<'a>(cases: &[&'a Case]) -> Vec<(&'a Case, &'a Case)> {
+    let bricks = |c: &Case| param(c, "brick_order").and_then(|v| v.as_str().map(String::from));
+    let mut out = Vec::new();
+    for &c in cases.iter().filter(|c| bricks(c).as_deref() == Some("linear")) {
+        let stem = c.variant.as_deref().and_then(|v| Some(v.strip_suffix("rows")?.trim_end_matches('-')));
+        let stem = stem.filter(|s| !s.is_empty());
+        let twin = cases.iter().copied().find(|o| {
+            o.scene == c.scene
+                && o.structure == c.structure
+                && o.resolution == c.resolution
+                && order(o) == order(c)
+                && bricks(o).as_deref() == Some("morton")
+                && o.variant.as_deref() == stem
+        });
+        if let Some(twin) = twin {
+            out.push((c, twin));
+        }
+    }
+    out.sort_by_key(|(c, _)| (c.scene.clone(), c.resolution));
+    out
+}
+
+/// The brickmap's bricks, row-major against Morton: one table over every scene.
+fn brick_table(out: &mut Sheet, pairs: &[(&Case, &Case)]) {
+    out.push_str(
+        "### Brick order: voxel bits row-major against Morton
+
+",
+    );
+    out.push_str(
+        "The brickmap with each 8³ brick's 512 voxel bits by local Morton code (its default) and row-major,          x fastest (`brickmap.brick_order=linear`: a brick row is one byte of its mask). The top grid and the          bricks' places are the same; only the bit a voxel sits at moves. The brick DDA steps either number by          a masked subtract.
+
+",
+    );
+    out.push_str(
+        "| scene | brickmap | bricks | Morton Mrays/s | row-major Mrays/s | × | steps/ray |
+",
+    );
+    out.push_str(
+        "|---|---|---:|---:|---:|---:|---:|
+",
+    );
+    for (rows, morton) in pairs {
+        let (Some(r), Some(m)) = (rows.cpu_primary(), morton.cpu_primary()) else { continue };
+        let steps = match (r.steps_per_ray_mean - m.steps_per_ray_mean).abs() > 1e-9 * m.steps_per_ray_mean.max(1.0) {
+            true => format!("{:.1} (row-major: {:.2})", m.steps_per_ray_mean, r.steps_per_ray_mean),
+            false => format!("{:.1}", m.steps_per_ray_mean),
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {}³ | {} | {:.2} | {:.2} | {} | {steps} |",
+            rows.scene,
+            rows.resolution.unwrap_or(0),
+            mib(rows.memory.components.get("bricks").copied().unwrap_or(0)),
+            m.mrays_per_s,
+            r.mrays_per_s,
+            ratio(rows, morton).map_or("—".into(), |x| format!("{x:.2}×")),
+        );
+    }
+    out.push('\n');
+}
+
 /// The section (empty unless the run has a structure in both orders).
 pub fn section(results: &Results) -> Sheet {
     let mut out = Sheet::default();
     let all: Vec<&Case> = results.cases.iter().collect();
-    if rows(&all).is_empty() {
+    let bricks = brick_pairs(&all);
+    if rows(&all).is_empty() && bricks.is_empty() {
         return out;
     }
     out.push_str("## Cell order: Morton against row-major (issue 43)\n\n");
@@ -118,9 +189,12 @@ pub fn section(results: &Results) -> Sheet {
          them (the bits interleaved while each axis has some), padding the table up to 2× per axis; its DDA \
          encodes the start cell once per cell DDA and then steps by dilated increments. The brickmap \
          (`brickmap.order=morton`, a power-of-two top grid, no padding) encodes every top cell it reads. \
-         `pdep` is BMI2's bit deposit (`morton.encoder=auto` where the CPU has it), `table` the byte-table \
-         encoder. × is the speed over the row-major case's; steps per ray are the row-major case's, and a \
-         Morton case that took other steps says so.\n\n",
+         The VDB (`vdb.order`) numbers every node's child slots and every leaf's voxel bits by local Morton \
+         code (its default) or row-major (NanoVDB's), and stores each node's children in that order; its \
+         DDA steps either number by a masked subtract (no encoder), so its Morton column is that, and its \
+         table is the whole tree. `pdep` is BMI2's bit deposit (`morton.encoder=auto` where the CPU has \
+         it), `table` the byte-table encoder. × is the speed over the row-major case's; steps per ray are \
+         the row-major case's, and a Morton case that took other steps says so.\n\n",
     );
     let mut by_structure: Vec<(String, Vec<(u64, f64)>)> = Vec::new();
     for scene in results.scenes() {
@@ -131,7 +205,7 @@ pub fn section(results: &Results) -> Sheet {
         }
         let _ = writeln!(out, "### {scene}\n");
         out.push_str(
-            "| structure | table | Morton bytes | row-major Mrays/s | Morton (pdep) Mrays/s | × | Morton (table) Mrays/s | × | steps/ray |\n",
+            "| structure | table | Morton bytes | row-major Mrays/s | Morton (pdep; vdb: shifts) Mrays/s | × | Morton (table) Mrays/s | × | steps/ray |\n",
         );
         out.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         for row in &rows {
@@ -162,9 +236,10 @@ pub fn section(results: &Results) -> Sheet {
                 true => format!("{steps:.1}"),
                 false => format!("{steps:.1} (Morton: {})", other_steps.join(", ")),
             };
+            let variant = row.linear.variant.as_deref().unwrap_or("");
             let label = match row.linear.resolution {
-                Some(res) => format!("{} {res}³", row.linear.structure),
-                None => format!("{} {}", row.linear.structure, row.linear.variant.as_deref().unwrap_or("")),
+                Some(res) => format!("{} {res}³ {variant}", row.linear.structure).trim_end().to_string(),
+                None => format!("{} {variant}", row.linear.structure),
             };
             let _ = writeln!(
                 out,
@@ -185,7 +260,12 @@ pub fn section(results: &Results) -> Sheet {
         }
         out.push('\n');
     }
-    verdicts(&mut out, &by_structure);
+    if !bricks.is_empty() {
+        brick_table(&mut out, &bricks);
+    }
+    if !by_structure.is_empty() {
+        verdicts(&mut out, &by_structure);
+    }
     out
 }
 
@@ -201,9 +281,13 @@ fn verdicts(out: &mut Sheet, by_structure: &[(String, Vec<(u64, f64)>)]) {
         let wins: Vec<&(u64, f64)> = points.iter().filter(|p| p.1 > 1.0).collect();
         let first = points.iter().position(|p| p.1 > 1.0 && points.iter().filter(|q| q.0 >= p.0).all(|q| q.1 > 1.0));
         let list: Vec<String> = points.iter().map(|(b, x)| format!("{} {x:.2}×", mib(*b))).collect();
+        let how = match structure.as_str() {
+            "vdb" => "Morton slots, stepped by masked subtracts; by the tree's bytes",
+            _ => "Morton by `pdep` where run, else by table; by row-major table size",
+        };
         let _ = writeln!(
             out,
-            "- **{structure}** (Morton by `pdep` where run, else by table; by row-major table size): {}. {}\n",
+            "- **{structure}** ({how}): {}. {}\n",
             list.join(" · "),
             match first {
                 Some(i) =>

@@ -3,7 +3,8 @@
 //! - `top`: `(2^L / 8)³` words, x fastest ([`top_index`]) or at each cell's Morton index
 //!   (`brickmap.order=morton`): 0 for an empty cell, else the cell's brick index plus one;
 //! - `bricks`: [`BRICK_WORDS`] words per brick, the 512-bit voxel mask, bit = the voxel's local
-//!   Morton code (x in bit 0), in the order the voxeliser's stream met the cells.
+//!   Morton code (x in bit 0), or with `brickmap.brick_order=linear` its row-major index
+//!   `x + 8y + 64z`, in the order the voxeliser's stream met the cells.
 
 /// `log2` of a brick's side: 8³ voxels.
 pub const BRICK_SHIFT: u32 = 3;

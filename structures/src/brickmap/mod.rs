@@ -2,7 +2,7 @@
 //! Ray tracing and Editing of Large Voxel Scenes", MSc thesis, Utrecht 2015): a dense top grid
 //! of 32-bit brick pointers over 8³-voxel cells (row-major, or in Morton order with
 //! `brickmap.order=morton`, seed 003 / issue 43), and for every occupied cell a brick of 512
-//! voxel bits. The top DDA steps over empty cells whole; voxel steps happen only inside bricks.
+//! voxel bits (by local Morton code, or row-major with `brickmap.brick_order=linear`). The top DDA steps over empty cells whole; voxel steps happen only inside bricks.
 //! It is the voxel twin of the triangle grids' `rg2`: no tree, one level of indirection.
 //!
 //! | file | what |
@@ -54,6 +54,9 @@ pub struct Brickmap {
     pub order: CellOrder,
     /// The encoder a Morton-ordered top grid is indexed with (`pdep` or the table).
     pub morton: Morton,
+    /// Where each voxel's bit sits in its brick (`brickmap.brick_order`): at its local Morton code
+    /// (the default), or row-major, x fastest (a brick's rows are its mask's bytes).
+    pub brick_order: CellOrder,
     /// The top grid and the bricks (see [`layout`]).
     pub top: Vec<u32>,
     pub bricks: Vec<u32>,
@@ -67,11 +70,17 @@ pub struct Brickmap {
 }
 
 /// The brickmap's parameters besides the level.
-pub const KEYS: [&str; 3] = ["voxel.levels", "brickmap.order", crate::voxel::morton::ENCODER_KEY];
+pub const KEYS: [&str; 4] =
+    ["voxel.levels", "brickmap.order", "brickmap.brick_order", crate::voxel::morton::ENCODER_KEY];
 
 /// The top grid's order (`brickmap.order`: `linear`, the default, or `morton`).
 pub fn order_param(params: &crate::Params) -> Result<CellOrder, BuildError> {
     params.choice("brickmap.order", CellOrder::Linear, &CellOrder::NAMES)
+}
+
+/// The bricks' order (`brickmap.brick_order`: `morton`, the default, or `linear`).
+pub fn brick_order_param(params: &crate::Params) -> Result<CellOrder, BuildError> {
+    params.choice("brickmap.brick_order", CellOrder::Morton, &CellOrder::NAMES)
 }
 
 /// The voxel level of a build (`--levels`), checked against the brickmap's limit.
@@ -131,6 +140,7 @@ impl Structure for Brickmap {
             "stats": self.stats,
             "order": self.order.name(),
             "morton_encoder": (self.order == CellOrder::Morton).then(|| self.morton.name()),
+            "brick_order": self.brick_order.name(),
         });
         v["brickmap"] = brick_grid_json(own, &self.shape(), &self.memory(), self.voxels);
         v

@@ -3,8 +3,8 @@
 //! voxels. Plus the voxels it stands for, by full expansion or point query.
 
 use super::{BRICK_SHIFT, BRICK_WORDS, Brickmap};
-use crate::voxel::morton;
-use crate::voxel::wide::local_slot;
+use crate::voxel::morton::{self, CellOrder};
+use crate::voxel::wide::{slot_coords, slot_in};
 
 pub fn validate(b: &Brickmap) -> Result<(), String> {
     let n = b.side as usize;
@@ -54,13 +54,17 @@ pub(crate) fn check_bricks(
 
 /// Every voxel's Morton code, increasing.
 pub fn expand(b: &Brickmap) -> Vec<u64> {
-    expand_bricks(b.side, &b.bricks, b.voxels, |c| b.top[b.top_index(c)].checked_sub(1).map(|i| i as usize))
+    expand_bricks(b.side, &b.bricks, b.brick_order, b.voxels, |c| {
+        b.top[b.top_index(c)].checked_sub(1).map(|i| i as usize)
+    })
 }
 
-/// Every voxel's Morton code, increasing, of bricks whose top cell `c` names brick `brick_of(c)`.
+/// Every voxel's Morton code, increasing, of bricks (their voxels in `order`) whose top cell `c`
+/// names brick `brick_of(c)`.
 pub(crate) fn expand_bricks(
     side: u32,
     bricks: &[u32],
+    order: CellOrder,
     voxels: u64,
     brick_of: impl Fn([u32; 3]) -> Option<usize>,
 ) -> Vec<u64> {
@@ -71,9 +75,10 @@ pub(crate) fn expand_bricks(
                 let Some(brick) = brick_of([x, y, z]) else { continue };
                 let brick = &bricks[brick * BRICK_WORDS..][..BRICK_WORDS];
                 let code = morton::encode([x, y, z]);
-                for v in 0..512u64 {
+                for m in 0..512u32 {
+                    let v = slot_in(order, slot_coords(CellOrder::Morton, m, BRICK_SHIFT), BRICK_SHIFT);
                     if brick[(v >> 5) as usize] >> (v & 31) & 1 == 1 {
-                        out.push(code << (3 * BRICK_SHIFT) | v);
+                        out.push(code << (3 * BRICK_SHIFT) | u64::from(m));
                     }
                 }
             }
@@ -86,11 +91,11 @@ pub(crate) fn expand_bricks(
 /// Whether the voxel at integer coordinates `c` is set.
 pub fn contains(b: &Brickmap, c: [u32; 3]) -> bool {
     let cell = b.top[b.top_index(c.map(|x| x >> BRICK_SHIFT))];
-    cell.checked_sub(1).is_some_and(|brick| brick_contains(&b.bricks, brick as usize, c))
+    cell.checked_sub(1).is_some_and(|brick| brick_contains(&b.bricks, b.brick_order, brick as usize, c))
 }
 
-/// Whether brick `brick` holds the voxel at integer coordinates `c`.
-pub(crate) fn brick_contains(bricks: &[u32], brick: usize, c: [u32; 3]) -> bool {
-    let v = local_slot(c.map(|x| x & 7), BRICK_SHIFT);
+/// Whether brick `brick` (its voxels in `order`) holds the voxel at integer coordinates `c`.
+pub(crate) fn brick_contains(bricks: &[u32], order: CellOrder, brick: usize, c: [u32; 3]) -> bool {
+    let v = slot_in(order, c.map(|x| x & 7), BRICK_SHIFT);
     bricks[brick * BRICK_WORDS + (v >> 5) as usize] >> (v & 31) & 1 == 1
 }

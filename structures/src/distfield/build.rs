@@ -13,7 +13,7 @@ pub fn build(input: &BuildInput) -> Result<Distfield, BuildError> {
     let level = level_param(input.params)?;
     let cap = cap_param(input.params)?;
     let start = Instant::now();
-    let map = crate::brickmap::build::build_at(input, level, CellOrder::Linear);
+    let map = crate::brickmap::build::build_at(input, level, CellOrder::Linear, CellOrder::Morton);
     Ok(from_brickmap(map, cap, start))
 }
 

@@ -8,6 +8,7 @@
 use super::Distfield;
 use super::layout::{BRICK_SHIFT, read, top_index};
 use crate::brickmap::validate::{brick_contains, check_bricks, expand_bricks};
+use crate::voxel::morton::CellOrder;
 
 pub fn validate(f: &Distfield) -> Result<(), String> {
     let n = f.side as usize;
@@ -51,10 +52,11 @@ pub fn validate(f: &Distfield) -> Result<(), String> {
 
 /// Every voxel's Morton code, increasing.
 pub fn expand(f: &Distfield) -> Vec<u64> {
-    expand_bricks(f.side, &f.bricks, f.voxels, |c| read(f.top_word(c)).ok().map(|b| b as usize))
+    expand_bricks(f.side, &f.bricks, CellOrder::Morton, f.voxels, |c| read(f.top_word(c)).ok().map(|b| b as usize))
 }
 
 /// Whether the voxel at integer coordinates `c` is set.
 pub fn contains(f: &Distfield, c: [u32; 3]) -> bool {
-    read(f.top[top_index(f.side, c.map(|x| x >> BRICK_SHIFT))]).is_ok_and(|b| brick_contains(&f.bricks, b as usize, c))
+    read(f.top[top_index(f.side, c.map(|x| x >> BRICK_SHIFT))])
+        .is_ok_and(|b| brick_contains(&f.bricks, CellOrder::Morton, b as usize, c))
 }

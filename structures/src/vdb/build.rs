@@ -14,7 +14,8 @@ use super::{Vdb, VdbParams, VdbStats};
 use crate::BuildError;
 use crate::voxel::morton::CellOrder;
 use crate::voxel::wide::{
-    Laid, StreamCounts, WideShape, WideSink, feed_from_octree, slot_coords, slot_in, stream_voxelization,
+    Laid, StreamCounts, WideShape, WideSink, feed_from_octree, leaf_slots, slot_coords, slot_in, stream_voxelization,
+    write_leaf_mask,
 };
 use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 
@@ -49,7 +50,7 @@ struct Levels {
     leaf_count: u64,
     tiles: Vec<(u64, u32)>,
     order: CellOrder,
-    /// With `vdb.order=linear`: each leaf voxel's row-major bit, by its Morton bit.
+    /// Each leaf voxel's bit by its Morton bit ([`leaf_slots`]; empty for Morton order).
     leaf_slots: Vec<u32>,
     /// With `vdb.order=linear`, per level of children (1 to the leaves' level, `interior`): where
     /// each child, named by its index as written (Morton order), moves so that every node's
@@ -73,15 +74,7 @@ impl Levels {
             leaf_count: 0,
             tiles: Vec::new(),
             order: params.order,
-            leaf_slots: match params.order {
-                CellOrder::Morton => Vec::new(),
-                CellOrder::Linear => {
-                    let b = params.log2[interior];
-                    (0..1 << (3 * b))
-                        .map(|v| slot_in(CellOrder::Linear, slot_coords(CellOrder::Morton, v, b), b))
-                        .collect()
-                }
-            },
+            leaf_slots: leaf_slots(params.order, params.log2[interior]),
             moved: vec![Vec::new(); interior + 1],
             scratch: Vec::new(),
         }
@@ -108,23 +101,7 @@ impl WideSink for Levels {
             out[..3].copy_from_slice(&origin);
         }
         let mask = &mut out[self.sizes.leaf_mask()..self.sizes.leaf_mask() + mask_words(bits)];
-        match self.order {
-            CellOrder::Morton => {
-                for (i, w) in mask.iter_mut().enumerate() {
-                    *w = (voxels[i / 2] >> (32 * (i % 2))) as u32;
-                }
-            }
-            CellOrder::Linear => {
-                for (i, &word) in voxels.iter().enumerate() {
-                    let mut m = word;
-                    while m != 0 {
-                        let s = self.leaf_slots[64 * i + m.trailing_zeros() as usize];
-                        mask[(s >> 5) as usize] |= 1 << (s & 31);
-                        m &= m - 1;
-                    }
-                }
-            }
-        }
+        write_leaf_mask(voxels, &self.leaf_slots, mask);
         self.leaf_count += 1;
         (self.leaf_count - 1) as u32
     }

@@ -372,6 +372,37 @@ pub fn slot_coords(order: CellOrder, s: u32, bits: u32) -> [u32; 3] {
     }
 }
 
+/// Where each voxel of a leaf with `bits` bits per axis goes in `order`, by its local Morton code
+/// (the bit the builds meet it at): empty for Morton order, which moves nothing.
+pub fn leaf_slots(order: CellOrder, bits: u32) -> Vec<u32> {
+    match order {
+        CellOrder::Morton => Vec::new(),
+        CellOrder::Linear => {
+            (0..1 << (3 * bits)).map(|m| slot_in(order, slot_coords(CellOrder::Morton, m, bits), bits)).collect()
+        }
+    }
+}
+
+/// A leaf's voxels as the builds meet them (bit `m` of the `u64` words: the voxel of local Morton
+/// code `m`) written into the zeroed `u32` mask words `mask`, each voxel at its slot by `slots`
+/// ([`leaf_slots`]; empty: as met).
+pub fn write_leaf_mask(voxels: &[u64], slots: &[u32], mask: &mut [u32]) {
+    if slots.is_empty() {
+        for (i, w) in mask.iter_mut().enumerate() {
+            *w = (voxels[i / 2] >> (32 * (i % 2))) as u32;
+        }
+        return;
+    }
+    for (i, &word) in voxels.iter().enumerate() {
+        let mut m = word;
+        while m != 0 {
+            let s = slots[64 * i + m.trailing_zeros() as usize];
+            mask[(s >> 5) as usize] |= 1 << (s & 31);
+            m &= m - 1;
+        }
+    }
+}
+
 /// Spreads the low 10 bits of `x` so bit `i` lands on bit `3i` (the WGSL kernels' `spread10`).
 #[inline(always)]
 pub fn spread10(x: u32) -> u32 {
