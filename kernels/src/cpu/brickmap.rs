@@ -109,11 +109,26 @@ pub(crate) fn trace_bricks<G: BrickGrid, S: Stats>(
     if grid.bricks().is_empty() {
         return None;
     }
-    let (voxels, levels, occupied) = grid.frame();
-    match grid.row_major_bricks() {
-        true => trace(&Nodes::<G, true> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats),
-        false => trace(&Nodes::<G, false> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats),
+    if grid.row_major_bricks() {
+        return trace_row_major_bricks(grid, ray, t_min, t_max, stats);
     }
+    let (voxels, levels, occupied) = grid.frame();
+    trace(&Nodes::<G, false> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats)
+}
+
+/// [`trace_bricks`] over row-major bricks: a function of its own, so that the two orders' loops
+/// are not inlined into one caller (there the second loop's array maps were left as calls:
+/// +47 % instructions under callgrind).
+#[inline(never)]
+fn trace_row_major_bricks<G: BrickGrid, S: Stats>(
+    grid: &G,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    stats: &mut S,
+) -> Option<Hit> {
+    let (voxels, levels, occupied) = grid.frame();
+    trace(&Nodes::<G, true> { grid }, levels, voxels, occupied, ray, t_min, t_max, stats)
 }
 
 /// [`trace_bricks`] with its steps and reads recorded.

@@ -136,24 +136,15 @@ fn brick_pairs<'a>(cases: &[&'a Case]) -> Vec<(&'a Case, &'a Case)> {
 
 /// The brickmap's bricks, row-major against Morton: one table over every scene.
 fn brick_table(out: &mut Sheet, pairs: &[(&Case, &Case)]) {
+    out.push_str("### Brick order: voxel bits row-major against Morton\n\n");
     out.push_str(
-        "### Brick order: voxel bits row-major against Morton
-
-",
+        "The brickmap with each 8³ brick's 512 voxel bits by local Morton code (its default) and row-major, \
+         x fastest (`brickmap.brick_order=linear`: a brick row is one byte of its mask). The top grid and the \
+         bricks' places are the same; only the bit a voxel sits at moves. The brick DDA steps either number by \
+         a masked subtract.\n\n",
     );
-    out.push_str(
-        "The brickmap with each 8³ brick's 512 voxel bits by local Morton code (its default) and row-major,          x fastest (`brickmap.brick_order=linear`: a brick row is one byte of its mask). The top grid and the          bricks' places are the same; only the bit a voxel sits at moves. The brick DDA steps either number by          a masked subtract.
-
-",
-    );
-    out.push_str(
-        "| scene | brickmap | bricks | Morton Mrays/s | row-major Mrays/s | × | steps/ray |
-",
-    );
-    out.push_str(
-        "|---|---|---:|---:|---:|---:|---:|
-",
-    );
+    out.push_str("| scene | brickmap | bricks | Morton Mrays/s | row-major Mrays/s | × | steps/ray |\n");
+    out.push_str("|---|---|---:|---:|---:|---:|---:|\n");
     for (rows, morton) in pairs {
         let (Some(r), Some(m)) = (rows.cpu_primary(), morton.cpu_primary()) else { continue };
         let steps = match (r.steps_per_ray_mean - m.steps_per_ray_mean).abs() > 1e-9 * m.steps_per_ray_mean.max(1.0) {
