@@ -290,13 +290,7 @@ impl SourceRun<'_> {
             "a smaller --width and --height",
         )?;
         if self.order != VoxelOrder::Linear {
-            let padded = match self.order {
-                VoxelOrder::Morton => volume.dims.iter().map(|d| u64::from(d.next_power_of_two())).product::<u64>(),
-                VoxelOrder::Tiles { shift } => {
-                    volume.dims.iter().map(|d| u64::from(d.div_ceil(1 << shift) << shift)).product()
-                }
-                VoxelOrder::Linear => 0,
-            };
+            let padded = self.order.padded_len(volume.dims);
             budget.check(
                 format!("{name}'s samples in {} order", self.order.name()),
                 padded * volume.samples.bytes() / volume.voxel_count().max(1),

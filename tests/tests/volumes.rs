@@ -463,6 +463,7 @@ fn every_voxel_order_reads_the_same_samples_and_gives_the_same_images() {
             let padding = taken.iter().enumerate().filter(|(_, t)| !**t).map(|(i, _)| i);
             assert!(padding.clone().all(|i| store.samples().get(i) == 0.0), "{what}: padding is zero");
             assert!(store.padded_len() as u64 >= volume.voxel_count());
+            assert_eq!(store.padded_len() as u64, order.padded_len(d), "{what}: the budget's padded size");
             let sampler = Sampler::over(volume, store);
             for (tf_name, tf) in transfer_functions(volume).into_iter().step_by(3) {
                 for e in VOLUME_STRUCTURES {

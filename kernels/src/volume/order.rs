@@ -45,6 +45,20 @@ impl VoxelOrder {
             format!("volume.order '{name}' is not one of {}", names.join(", "))
         })
     }
+
+    /// Samples a volume of `dims` voxels takes in this order, the padding included: Morton order
+    /// pads each axis to a power of two, tiles to a whole tile. Known before any copy is made (a
+    /// memory budget's check); a store's [`VoxelStore::padded_len`] is this.
+    pub fn padded_len(self, dims: [u32; 3]) -> u64 {
+        let padded = |d: u32| -> u64 {
+            match self {
+                VoxelOrder::Linear => u64::from(d),
+                VoxelOrder::Morton => u64::from(d.next_power_of_two()),
+                VoxelOrder::Tiles { shift } => u64::from(d.div_ceil(1 << shift)) << shift,
+            }
+        };
+        dims.iter().map(|&d| padded(d)).product()
+    }
 }
 
 /// How an index is computed, with what it needs.
@@ -85,11 +99,10 @@ impl<'a> VoxelStore<'a> {
                 encoder,
             },
             VoxelOrder::Tiles { shift } => {
-                let [tx, ty, tz] = volume.dims.map(|d| u64::from(d.div_ceil(1 << shift)));
-                if (tx * ty * tz) << (3 * shift) > 1 << 32 {
+                if order.padded_len(volume.dims) > 1 << 32 {
                     return Err(format!("{:?} voxels pad to more than 2^32 in tiles", volume.dims));
                 }
-                Addressing::Tiles { shift, tiles: [tx as usize, ty as usize, tz as usize] }
+                Addressing::Tiles { shift, tiles: volume.dims.map(|d| d.div_ceil(1 << shift) as usize) }
             }
         };
         let mut store = VoxelStore { order, addressing, samples: Cow::Owned(Samples::U8(Vec::new())) };

@@ -245,70 +245,6 @@ pub fn order_param(kind: &str, params: &crate::Params) -> Result<CellOrder, crat
     params.choice(&format!("{kind}.order"), CellOrder::Linear, &CellOrder::NAMES)
 }
 
-/// A one-grid layout's offsets and references, row-major, reordered to the Morton order of
-/// `interleave` (padding entries empty), in parallel over runs of Morton indices: each run counts
-/// its cells' references, the runs' totals give each run's first offset, and each run then
-/// copies its cells' references into its own slice of the output.
-fn reorder_cells(interleave: &Interleave, h: &GridHeader, cells: &[u32], refs: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    use rayon::prelude::*;
-    const RUN: usize = 1 << 16;
-    let len = interleave.len() as usize;
-    // Each byte of an index decoded once (4 × 256 cells, bit by bit): a cell is the OR of its
-    // index's four bytes' cells, four loads from L1, whatever the CPU.
-    let bytes: Vec<[u32; 3]> = (0..4).flat_map(|b| (0..256u32).map(move |v| interleave.decode(v << (8 * b)))).collect();
-    let decode = |i: u32| -> [u32; 3] {
-        let part = |b: usize| bytes[256 * b + (i >> (8 * b) & 0xff) as usize];
-        let (p0, p1, p2, p3) = (part(0), part(1), part(2), part(3));
-        std::array::from_fn(|a| p0[a] | p1[a] | p2[a] | p3[a])
-    };
-    // The references of the cell at Morton index i (none for padding).
-    let refs_at = |i: usize| -> &[u32] {
-        let c = decode(i as u32);
-        if (0..3).any(|a| c[a] >= h.res[a]) {
-            return &[];
-        }
-        let k = h.cell_index(c[0], c[1], c[2]) as usize;
-        &refs[cells[k] as usize..cells[k + 1] as usize]
-    };
-    let mut offsets = vec![0u32; len + 1];
-    let totals: Vec<usize> = offsets[..len]
-        .par_chunks_mut(RUN)
-        .enumerate()
-        .map(|(r, run)| {
-            let mut at = 0;
-            for (j, o) in run.iter_mut().enumerate() {
-                *o = at as u32;
-                at += refs_at(r * RUN + j).len();
-            }
-            at
-        })
-        .collect();
-    let firsts: Vec<usize> = totals.iter().scan(0, |sum, &n| Some(std::mem::replace(sum, *sum + n))).collect();
-    offsets[..len]
-        .par_chunks_mut(RUN)
-        .zip(&firsts)
-        .for_each(|(run, &first)| run.iter_mut().for_each(|o| *o += first as u32));
-    let total: usize = totals.iter().sum();
-    offsets[len] = total as u32;
-    let mut out = vec![0u32; total];
-    let mut slices = Vec::with_capacity(totals.len());
-    let mut rest = &mut out[..];
-    for &n in &totals {
-        let (run, tail) = rest.split_at_mut(n);
-        slices.push(run);
-        rest = tail;
-    }
-    slices.into_par_iter().enumerate().for_each(|(r, run)| {
-        let mut at = 0;
-        for i in r * RUN..((r + 1) * RUN).min(len) {
-            let src = refs_at(i);
-            run[at..at + src.len()].copy_from_slice(src);
-            at += src.len();
-        }
-    });
-    (offsets, out)
-}
-
 /// Where a grid build's wall time went, in ms, on the build's threads: what the report names
 /// when one grid kind builds slower than another.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -377,7 +313,29 @@ impl Grid {
         let Some(interleave) = Interleave::new(h.res) else {
             return refuse(format!("a top grid of {:?} cells pads to more than 2^32 in Morton order", h.res));
         };
-        let (cells, refs) = reorder_cells(&interleave, &h, &self.cells, &self.refs);
+        let len = interleave.len() as usize;
+        // The row-major cell at each Morton index, u32::MAX for padding.
+        let mut row_major = vec![u32::MAX; len];
+        let mut c = 0;
+        for z in 0..h.res[2] {
+            for y in 0..h.res[1] {
+                for x in 0..h.res[0] {
+                    row_major[interleave.encode(encoder, [x, y, z]) as usize] = c;
+                    c += 1;
+                }
+            }
+        }
+        let mut cells = Vec::with_capacity(len + 1);
+        let mut refs = Vec::with_capacity(self.refs.len());
+        for &c in &row_major {
+            cells.push(refs.len() as u32);
+            if c != u32::MAX {
+                refs.extend_from_slice(
+                    &self.refs[self.cells[c as usize] as usize..self.cells[c as usize + 1] as usize],
+                );
+            }
+        }
+        cells.push(refs.len() as u32);
         self.cells = cells;
         self.refs = refs;
         self.headers[0].order = ORDER_MORTON;
