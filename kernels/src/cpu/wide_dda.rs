@@ -258,11 +258,6 @@ pub fn cast<N: WideNodes, S: Stats>(
         desc[k0] = nodes.fetch(n, k0);
     }
 
-    // The current cell: its level `k` (with its side and its parent's, in voxels' log2), its
-    // lower corner `lo` in the mirrored frame, in voxels, the distances to its exit planes, and
-    // its slot in its parent, whose data is `cur`. Over empty space the "cell" may be an aligned
-    // block of `2^block` cells per axis of level `k` (see ADVANCE); `lo` and `exit` are then the
-    // block's.
     // Row-major slots: the bits per axis of level k's node, which a node the size of the grid or
     // larger has more of than the grid shows (its slots' strides are the node's). None: Morton
     // slots, the same code at any size.
@@ -270,6 +265,12 @@ pub fn cast<N: WideNodes, S: Stats>(
         true => Some(shifts[k - 1] - shifts[k]),
         false => None,
     };
+
+    // The current cell: its level `k` (with its side and its parent's, in voxels' log2), its
+    // lower corner `lo` in the mirrored frame, in voxels, the distances to its exit planes, and
+    // its slot in its parent, whose data is `cur`. Over empty space the "cell" may be an aligned
+    // block of `2^block` cells per axis of level `k` (see ADVANCE); `lo` and `exit` are then the
+    // block's.
     let mut k = k0;
     let mut shift = shifts[k0];
     let mut parent = grid_level;
