@@ -162,31 +162,30 @@ pub fn run_program(
 }
 
 /// The compiled pipelines of one program.
+#[derive(Clone)]
 struct Pipelines {
     main: wgpu::ComputePipeline,
     prepass: Option<wgpu::ComputePipeline>,
 }
 
-struct Runner<'a> {
-    ctx: &'a GpuContext,
-    program: &'a GpuProgram<'a>,
-    asm: &'a Assembled,
-    opts: &'a DispatchOptions,
+/// A program compiled on a device: its module, bind group layouts and pipeline layout, and its
+/// pipelines with step counting off (index 0) and on (1), each made when first asked for.
+struct Compiled {
+    module: wgpu::ShaderModule,
     layouts: [wgpu::BindGroupLayout; 2],
-    timed: Option<Pipelines>,
-    counted: Option<Pipelines>,
+    layout: wgpu::PipelineLayout,
+    pipelines: [std::sync::OnceLock<Pipelines>; 2],
 }
 
-impl<'a> Runner<'a> {
-    fn new(
-        ctx: &'a GpuContext,
-        program: &'a GpuProgram,
-        asm: &'a Assembled,
-        opts: &'a DispatchOptions,
-    ) -> Result<Self, GpuError> {
-        let device = &ctx.device;
-        // Compile errors get their own scope so they are reported before anything runs.
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+/// A program as compiled: its assembled source, its chunk bindings and its prepass entry.
+type ProgramKey = (String, usize, Option<&'static str>);
+
+/// The programs a context has compiled ([`super::GpuContext`]'s cache), by [`ProgramKey`].
+#[derive(Default)]
+pub(crate) struct CompiledPrograms(std::sync::Mutex<std::collections::HashMap<ProgramKey, std::sync::Arc<Compiled>>>);
+
+impl Compiled {
+    fn new(device: &wgpu::Device, program: &GpuProgram, asm: &Assembled) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(program.label),
             source: wgpu::ShaderSource::Wgsl(asm.source.as_str().into()),
@@ -221,13 +220,18 @@ impl<'a> Runner<'a> {
             bind_group_layouts: &[Some(&group0), Some(&group1)],
             immediate_size: 0,
         });
-        let pipelines = |count_steps: bool| {
+        Self { module, layouts: [group0, group1], layout, pipelines: Default::default() }
+    }
+
+    /// The pipelines with step counting on or off, made on first use.
+    fn pipelines(&self, device: &wgpu::Device, program: &GpuProgram, count_steps: bool) -> Pipelines {
+        let made = self.pipelines[usize::from(count_steps)].get_or_init(|| {
             let constants = [("COUNT_STEPS", if count_steps { 1.0 } else { 0.0 })];
             let pipeline = |entry: &str| {
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(program.label),
-                    layout: Some(&layout),
-                    module: &module,
+                    layout: Some(&self.layout),
+                    module: &self.module,
                     entry_point: Some(entry),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &constants,
@@ -237,13 +241,52 @@ impl<'a> Runner<'a> {
                 })
             };
             Pipelines { main: pipeline("main"), prepass: program.prepass.map(|p| pipeline(p.entry)) }
-        };
-        let timed = (opts.warmup + opts.reps > 0).then(|| pipelines(false));
-        let counted = opts.count_steps.then(|| pipelines(true));
+        });
+        made.clone()
+    }
+}
+
+struct Runner<'a> {
+    ctx: &'a GpuContext,
+    program: &'a GpuProgram<'a>,
+    asm: &'a Assembled,
+    opts: &'a DispatchOptions,
+    layouts: [wgpu::BindGroupLayout; 2],
+    timed: Option<Pipelines>,
+    counted: Option<Pipelines>,
+}
+
+impl<'a> Runner<'a> {
+    /// The program's pipelines, compiled on this context once (the cache keeps a program only
+    /// once it compiled without error).
+    fn new(
+        ctx: &'a GpuContext,
+        program: &'a GpuProgram,
+        asm: &'a Assembled,
+        opts: &'a DispatchOptions,
+    ) -> Result<Self, GpuError> {
+        let device = &ctx.device;
+        let key: ProgramKey = (asm.source.clone(), asm.chunks.len(), program.prepass.map(|p| p.entry));
+        let cached = ctx.compiled.0.lock().map_err(|_| GpuError::Program {
+            label: program.label.into(),
+            detail: "the compiled-program cache was poisoned by a panic".into(),
+        })?;
+        let known = cached.get(&key).cloned();
+        drop(cached);
+        // Compile errors get their own scope so they are reported before anything runs.
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let compiled = known.clone().unwrap_or_else(|| std::sync::Arc::new(Compiled::new(device, program, asm)));
+        let timed = (opts.warmup + opts.reps > 0).then(|| compiled.pipelines(device, program, false));
+        let counted = opts.count_steps.then(|| compiled.pipelines(device, program, true));
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Program { label: program.label.into(), detail: format!("compiling: {e}") });
         }
-        Ok(Self { ctx, program, asm, opts, layouts: [group0, group1], timed, counted })
+        if known.is_none()
+            && let Ok(mut cache) = ctx.compiled.0.lock()
+        {
+            cache.insert(key, std::sync::Arc::clone(&compiled));
+        }
+        Ok(Self { ctx, program, asm, opts, layouts: compiled.layouts.clone(), timed, counted })
     }
 
     fn fail(&self, what: &'static str, detail: impl ToString) -> GpuError {

@@ -115,6 +115,10 @@ pub struct GpuContext {
     info: GpuAdapterInfo,
     /// Whether the device was created with TIMESTAMP_QUERY (else kernels are timed by wall clock).
     pub(crate) timestamps: bool,
+    /// Every program compiled on this device so far, by its assembled source: compiling is most
+    /// of a small dispatch's time on a software adapter (lavapipe spends 0.5-1 s per volume
+    /// kernel), and is never part of a timed dispatch.
+    pub(crate) compiled: dispatch::CompiledPrograms,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -141,7 +145,7 @@ impl GpuContext {
         // Every operation runs inside error scopes (see `dispatch`); anything that still escapes
         // them is reported, not turned into a panic inside wgpu's callback.
         device.on_uncaptured_error(Arc::new(|e| eprintln!("accel-bench: uncaptured wgpu error: {e}")));
-        Ok(GpuContext { device, queue, info, timestamps })
+        Ok(GpuContext { device, queue, info, timestamps, compiled: Default::default() })
     }
 
     /// One context per process, created on first use: creating a lavapipe device takes a while, and
