@@ -155,7 +155,7 @@ macro_rules! with_nodes {
                 let $nodes = Nodes::<true, false, false>::new($v);
                 $body
             }
-            (Tables::Dense, Skip::Block, _) => {
+            (Tables::Dense, Skip::Block, CellOrder::Morton) => {
                 let $nodes = Nodes::<true, true, false>::new($v);
                 $body
             }
@@ -163,7 +163,7 @@ macro_rules! with_nodes {
                 let $nodes = Nodes::<false, false, false>::new($v);
                 $body
             }
-            (Tables::Compact, Skip::Block, _) => {
+            (Tables::Compact, Skip::Block, CellOrder::Morton) => {
                 let $nodes = Nodes::<false, true, false>::new($v);
                 $body
             }
@@ -175,6 +175,7 @@ macro_rules! with_nodes {
                 let $nodes = Nodes::<false, false, true>::new($v);
                 $body
             }
+            (_, Skip::Block, CellOrder::Linear) => unreachable!("every vdb build refuses it (VdbParams::check)"),
         }
     };
 }

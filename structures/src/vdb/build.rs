@@ -20,6 +20,7 @@ use crate::voxel::wide::{
 use crate::voxel::{Octree, VoxelGrid, VoxelizeStats, morton};
 
 pub fn build(scene: &Scene, params: VdbParams) -> Result<Vdb, BuildError> {
+    params.check()?;
     let start = Instant::now();
     let grid = VoxelGrid::fit(scene.bounds(), params.level);
     let shape = params.shape();
@@ -30,6 +31,7 @@ pub fn build(scene: &Scene, params: VdbParams) -> Result<Vdb, BuildError> {
 
 /// The same tree from the canonical octree's levels (the tests' second path to the same words).
 pub fn from_octree(tree: &Octree, params: VdbParams) -> Result<Vdb, BuildError> {
+    params.check()?;
     let start = Instant::now();
     let shape = params.shape();
     let mut sink = Levels::new(&params, &shape);

@@ -97,7 +97,16 @@ impl VdbParams {
         }
         let skip = params.choice("vdb.skip", Skip::Child, &[("child", Skip::Child), ("block", Skip::Block)])?;
         let order = params.choice("vdb.order", CellOrder::Morton, &CellOrder::NAMES)?;
-        if order == CellOrder::Linear && skip == Skip::Block {
+        let params = Self { level, log2, tables, skip, order };
+        params.check()?;
+        Ok(params)
+    }
+
+    /// Refuses what no kernel walks: block skipping over row-major slots (an empty block of
+    /// 2^k children per axis is a run of consecutive mask bits only in Morton order). Every
+    /// build checks it, whoever made the parameters.
+    pub fn check(&self) -> Result<(), BuildError> {
+        if self.order == CellOrder::Linear && self.skip == Skip::Block {
             return Err(BuildError::BadParam {
                 key: "vdb.skip".into(),
                 detail: "block needs vdb.order=morton: an empty block of 2^k children per axis is a run of \
@@ -105,7 +114,7 @@ impl VdbParams {
                     .into(),
             });
         }
-        Ok(Self { level, log2, tables, skip, order })
+        Ok(())
     }
 
     /// The cube sides: the top nodes' (`2^S`, S the sum of the bits), then each level's children.
